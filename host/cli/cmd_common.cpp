@@ -1,0 +1,53 @@
+#include <charconv>
+
+#include <fmt/format.h>
+
+#include "cli/commands.h"
+#include "core/error.h"
+
+namespace cr::cli {
+
+void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
+{
+  cmd->add_option("--accel", o.accel, "Acceleration structure: grid, octree or bvh")->capture_default_str();
+  cmd->add_option("--backend", o.backend, "Backend: reference, scalar, simd or opencl")->capture_default_str();
+  cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
+  cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--grid-density", o.gridDensity, "Grid cells per primitive (0: default)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--octree-leaf", o.octreeLeaf, "Max references per octree leaf (0: default)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--octree-depth", o.octreeDepth, "Max octree depth (0: default)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--bvh-leaf", o.bvhLeaf, "Max primitives per BVH leaf (0: default)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");
+  cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU)");
+  cmd->add_option("--variant", o.variant, "Traversal variant: ray or packet (default: the backend's choice)");
+}
+
+TraceConfig TracerOptions::ToConfig() const
+{
+  TraceConfig c;
+  c.accel = ParseAccelKind(accel);
+  c.backend = ParseBackend(backend);
+  c.precision = ParsePrecision(precision);
+  c.threads = threads;
+  c.params.gridDensity = gridDensity;
+  c.params.octreeLeaf = octreeLeaf;
+  c.params.octreeDepth = octreeDepth;
+  c.params.bvhLeaf = bvhLeaf;
+  c.isa = isa;
+  c.device = device;
+  c.variant = variant;
+  return c;
+}
+
+void ParseSize(const std::string& s, int& w, int& h)
+{
+  auto x = s.find('x');
+  auto num = [&](std::string_view t, int& v) {
+    auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    return ec == std::errc() && p == t.data() + t.size() && v >= 1 && v <= 65536;
+  };
+  if (x == std::string::npos || !num(std::string_view(s).substr(0, x), w) || !num(std::string_view(s).substr(x + 1), h))
+    throw InputError(fmt::format("--size '{}': expected WIDTHxHEIGHT, each 1..65536", s));
+}
+
+}  // namespace cr::cli

@@ -1,0 +1,183 @@
+// rays, trace and check.
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "cli/commands.h"
+#include "core/error.h"
+#include "io/rays_io.h"
+#include "rays/raygen.h"
+#include "reference/check.h"
+#include "reference/reference.h"
+
+namespace cr::cli {
+
+namespace {
+
+std::unique_ptr<tbb::global_control> LimitThreads(int threads)
+{
+  if (threads <= 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+}
+
+void CheckCount(const std::string& raysPath, std::size_t rays, const std::string& hitsPath, std::size_t hits)
+{
+  if (rays != hits)
+    throw InputError(hitsPath, 0, fmt::format("{} hits for {} rays in {}", hits, rays, raysPath));
+}
+
+}  // namespace
+
+Run RegisterRays(CLI::App& app)
+{
+  struct O {
+    std::string scene, kind = "primary", size, out;
+    bool spd = false;
+    std::uint64_t seed = 1, count = 0;
+    int threads = 0;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = app.add_subcommand("rays", "Generate a ray set (.rays) for a scene");
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("--kind", o->kind, "primary, shadow, diffuse or random")->capture_default_str();
+  cmd->add_option("--size", o->size, "Image size WxH for primary samples (default: the scene's resolution)");
+  cmd->add_flag("--spd-corners", o->spd, "Primary rays through the (W+1)x(H+1) pixel corners (SPD procedure)");
+  cmd->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  cmd->add_option("--count", o->count, "Secondary or random rays to produce (default: W*H)");
+  cmd->add_option("--threads", o->threads, "CPU threads (0: all cores)");
+  cmd->add_option("-o,--output", o->out, "Output .rays file")->required();
+  return [o]() {
+    auto limit = LimitThreads(o->threads);
+    RayGenOptions g;
+    g.kind = ParseRayKind(o->kind);
+    if (!o->size.empty()) ParseSize(o->size, g.width, g.height);
+    g.spdCorners = o->spd;
+    g.seed = o->seed;
+    g.count = o->count;
+    if (g.spdCorners && g.kind != RayKind::Primary) throw InputError("--spd-corners applies to --kind primary only");
+    Scene scene = LoadScene(o->scene);
+    ref::ReferenceTracer tracer(scene);
+    std::vector<RayRecord> rays = GenerateRays(scene, tracer, g);
+    WriteRays(o->out, rays);
+    nlohmann::json j{{"scene", o->scene}, {"kind", o->kind}, {"rays", rays.size()}, {"output", o->out}};
+    std::cout << j.dump() << std::endl;
+    return 0;
+  };
+}
+
+Run RegisterTrace(CLI::App& app)
+{
+  struct O {
+    std::string scene, rays, out;
+    bool occlusion = false, stats = false;
+    int repeat = 1;
+    TracerOptions t;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = app.add_subcommand("trace", "Trace a ray set; print one JSON line; optionally write .hits");
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("--rays", o->rays, "Input .rays file")->required();
+  cmd->add_flag("--occlusion", o->occlusion, "Any-hit (shadow) query instead of closest hit");
+  cmd->add_option("--repeat", o->repeat, "Timed repetitions; trace_ms is their median")->check(CLI::Range(1, 1000));
+  cmd->add_flag("--stats", o->stats, "Add Havran's per-ray and per-structure measures");
+  cmd->add_option("-o,--output", o->out, "Output .hits file");
+  AddTracerOptions(cmd, o->t);
+  return [o]() {
+    TraceConfig cfg = o->t.ToConfig();
+    cfg.stats = o->stats;
+    auto limit = LimitThreads(cfg.threads);
+    Scene scene = LoadScene(o->scene);
+    std::vector<RayRecord> rays = ReadRays(o->rays);
+    auto tracer = CreateTracer(scene, cfg);
+    std::vector<HitRecord> hits;
+    std::vector<double> times;
+    TraceStatsSum stats;
+    for (int r = 0; r < o->repeat; ++r) {
+      TraceStatsSum* sp = (r == 0 && o->stats) ? &stats : nullptr;
+      auto t0 = std::chrono::steady_clock::now();
+      tracer->Trace(rays, hits, o->occlusion, sp);
+      times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::sort(times.begin(), times.end());
+    const double median = times[times.size() / 2];
+    if (!o->out.empty()) WriteHits(o->out, hits);
+    nlohmann::json j;
+    j["scene"] = o->scene;
+    j["accel"] = cfg.backend == Backend::Reference ? "reference-bvh" : AccelKindName(cfg.accel);
+    j["backend"] = BackendName(cfg.backend);
+    j["precision"] = PrecisionName(cfg.precision);
+    j["variant"] = tracer->VariantName();
+    j["device"] = tracer->DeviceName();
+    j["threads"] = cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency();
+    j["query"] = o->occlusion ? "occlusion" : "closest";
+    j["rays"] = rays.size();
+    j["build_ms"] = tracer->Info().buildMs;
+    j["trace_ms"] = median;
+    j["trace_ms_min"] = times.front();
+    j["trace_ms_max"] = times.back();
+    j["repeat"] = o->repeat;
+    j["mrays_per_s"] = median > 0.0 ? double(rays.size()) / (median * 1e3) : 0.0;
+    std::uint64_t nHit = 0;
+    for (const auto& h : hits) nHit += h.prim != CR_NO_HIT;
+    j["hits"] = nHit;
+    if (o->stats) {
+      const double n = rays.empty() ? 1.0 : double(rays.size());
+      j["per_ray"] = {{"intersection_tests", double(stats.nIT) / n},
+                      {"traversal_steps", double(stats.nTS) / n},
+                      {"leaves_visited", double(stats.nLeaves) / n},
+                      {"empty_leaves_visited", double(stats.nEmptyLeaves) / n}};
+      j["structure"] = tracer->Info();
+    }
+    std::cout << j.dump() << std::endl;
+    return 0;
+  };
+}
+
+Run RegisterCheck(CLI::App& app)
+{
+  struct O {
+    std::string scene, rays, hits;
+    bool occlusion = false;
+    int threads = 0;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = app.add_subcommand("check", "Compare a .hits file with the fp64 reference; print JSON");
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("--rays", o->rays, "The .rays file that was traced")->required();
+  cmd->add_option("--hits", o->hits, "The .hits file to check")->required();
+  cmd->add_flag("--occlusion", o->occlusion, "The hits answer the any-hit (shadow) query");
+  cmd->add_option("--threads", o->threads, "CPU threads (0: all cores)");
+  return [o]() {
+    auto limit = LimitThreads(o->threads);
+    Scene scene = LoadScene(o->scene);
+    std::vector<RayRecord> rays = ReadRays(o->rays);
+    std::vector<HitRecord> hits = ReadHits(o->hits);
+    CheckCount(o->rays, rays.size(), o->hits, hits.size());
+    ref::ReferenceTracer tracer(scene);
+    ref::CheckResult r = ref::CheckHits(tracer, rays, hits, o->occlusion);
+    nlohmann::json j{{"scene", o->scene},
+                     {"query", o->occlusion ? "occlusion" : "closest"},
+                     {"rays", r.rays},
+                     {"agree", r.agree},
+                     {"ties", r.ties},
+                     {"wrong", r.wrong},
+                     {"wrong_missed", r.wrongMissed},
+                     {"wrong_farther", r.wrongFarther},
+                     {"wrong_not_on_prim", r.wrongNotOnPrim},
+                     {"max_rel_t_err", r.maxRelTErr},
+                     {"mean_rel_t_err", r.meanRelTErr},
+                     {"tolerance", fmt::format("delta = 2^-16 * (|o|inf + t |d|inf)")},
+                     {"first_wrong", r.firstWrong},
+                     {"first_wrong_why", r.firstWrongWhy}};
+    std::cout << j.dump() << std::endl;
+    return 0;
+  };
+}
+
+}  // namespace cr::cli

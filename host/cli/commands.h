@@ -1,0 +1,38 @@
+// Subcommands of the `cellray` binary. Each Register* adds its subcommand to
+// the app and returns the function that runs it after parsing.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "trace/tracer.h"
+
+namespace cr::cli {
+
+using Run = std::function<int()>;
+
+// Options every command that builds a tracer shares.
+struct TracerOptions {
+  std::string accel = "bvh";
+  std::string backend = "scalar";
+  std::string precision = "robust";
+  int threads = 0;
+  double gridDensity = 0.0;
+  int octreeLeaf = 0, octreeDepth = 0, bvhLeaf = 0;
+  std::string isa, device, variant;
+  TraceConfig ToConfig() const;  // validates names (InputError)
+};
+void AddTracerOptions(CLI::App* cmd, TracerOptions& o);
+
+// Parses "WxH" (InputError on anything else).
+void ParseSize(const std::string& s, int& w, int& h);
+
+Run RegisterInfo(CLI::App& app);
+Run RegisterRays(CLI::App& app);
+Run RegisterTrace(CLI::App& app);
+Run RegisterCheck(CLI::App& app);
+Run RegisterRender(CLI::App& app);
+
+}  // namespace cr::cli

@@ -1,0 +1,166 @@
+#include "rays/raygen.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "kernels/offset.h"
+#include "scene/camera.h"
+
+namespace cr {
+
+RayKind ParseRayKind(const std::string& s)
+{
+  if (s == "primary") return RayKind::Primary;
+  if (s == "shadow") return RayKind::Shadow;
+  if (s == "diffuse") return RayKind::Diffuse;
+  if (s == "random") return RayKind::Random;
+  throw InputError(fmt::format("unknown ray kind '{}' (expected primary, shadow, diffuse or random)", s));
+}
+
+const char* RayKindName(RayKind k)
+{
+  switch (k) {
+    case RayKind::Primary: return "primary";
+    case RayKind::Shadow: return "shadow";
+    case RayKind::Diffuse: return "diffuse";
+    case RayKind::Random: return "random";
+  }
+  return "?";
+}
+
+std::uint64_t HashRandom(std::uint64_t seed, std::uint64_t stream, std::uint64_t index)
+{
+  // splitmix64 finaliser over a mix of the three inputs.
+  std::uint64_t z = seed * 0x9E3779B97F4A7C15ull + stream * 0xD1B54A32D192ED03ull + index * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+namespace {
+
+glm::vec3 ToF(const glm::dvec3& v) { return glm::vec3(v); }
+
+RayRecord Make(const glm::vec3& o, const glm::vec3& d, float tmin, float tmax)
+{
+  RayRecord r;
+  for (int a = 0; a < 3; ++a) {
+    r.org[a] = o[a];
+    r.dir[a] = d[a];
+  }
+  r.tmin = tmin;
+  r.tmax = tmax;
+  return r;
+}
+
+glm::vec3 Offset(const glm::vec3& p, const glm::vec3& n)
+{
+  float in[3] = {p.x, p.y, p.z}, nn[3] = {n.x, n.y, n.z}, out[3];
+  Offset_RayOrigin(in, nn, out);
+  return {out[0], out[1], out[2]};
+}
+
+// Secondary rays of one primary sample.
+void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind, const RayRecord& primary,
+               std::uint64_t seed, std::uint64_t sample, std::vector<RayRecord>& out)
+{
+  ref::DRay r = ref::MakeRay(primary);
+  ref::RefHit h = tr.Intersect(r);
+  if (!h.Found()) return;
+  glm::dvec3 p = r.o + h.t * r.d;
+  glm::dvec3 ng = tr.GeometricNormal(h.g, p);
+  glm::dvec3 ns = tr.ShadingNormal(h.g, p, h.u, h.v);
+  if (glm::dot(ng, r.d) > 0.0) ng = -ng;  // face the viewer
+  if (glm::dot(ns, r.d) > 0.0) ns = -ns;
+  const glm::vec3 pf = ToF(p);
+  if (kind == RayKind::Shadow) {
+    for (const Light& l : scene.lights) {
+      glm::dvec3 L = glm::dvec3(l.position) - p;
+      if (glm::dot(ns, L) <= 0.0) continue;
+      glm::dvec3 side = glm::dot(ng, L) >= 0.0 ? ng : -ng;
+      glm::vec3 o = Offset(pf, ToF(side));
+      glm::vec3 d = l.position - o;
+      if (d == glm::vec3(0.0f)) continue;
+      out.push_back(Make(o, d, 0.0f, 1.0f));
+    }
+  } else {
+    // Cosine-weighted direction about ng (Malley's method).
+    double u1 = ToUnit(HashRandom(seed, 11, 2 * sample)), u2 = ToUnit(HashRandom(seed, 11, 2 * sample + 1));
+    double rad = std::sqrt(u1), phi = 2.0 * 3.14159265358979323846 * u2;
+    glm::dvec3 a = std::fabs(ng.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+    glm::dvec3 t1 = glm::normalize(glm::cross(ng, a)), t2 = glm::cross(ng, t1);
+    glm::dvec3 d = rad * std::cos(phi) * t1 + rad * std::sin(phi) * t2 + std::sqrt(std::max(0.0, 1.0 - u1)) * ng;
+    glm::vec3 df = ToF(glm::normalize(d));
+    if (df == glm::vec3(0.0f)) return;
+    out.push_back(Make(Offset(pf, ToF(ng)), df, 0.0f, INFINITY));
+  }
+}
+
+}  // namespace
+
+std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tr, const RayGenOptions& opt)
+{
+  const int w = opt.width > 0 ? opt.width : scene.camera.width;
+  const int h = opt.height > 0 ? opt.height : scene.camera.height;
+  const CameraFrame frame = MakeCameraFrame(scene.camera, w, h);
+  const std::uint64_t target = opt.count ? opt.count : std::uint64_t(w) * std::uint64_t(h);
+  std::vector<RayRecord> rays;
+
+  if (opt.kind == RayKind::Primary) {
+    const int nx = opt.spdCorners ? w + 1 : w, ny = opt.spdCorners ? h + 1 : h;
+    const double off = opt.spdCorners ? -0.5 : 0.0;
+    rays.resize(std::size_t(nx) * std::size_t(ny));
+    tbb::parallel_for(0, ny, [&](int y) {
+      for (int x = 0; x < nx; ++x) rays[std::size_t(y) * nx + x] = PrimaryRay(frame, x + off, y + off);
+    });
+    return rays;
+  }
+  if (opt.kind == RayKind::Random) {
+    Bounds b = scene.WorldBounds();
+    rays.resize(target);
+    tbb::parallel_for(std::uint64_t(0), target, [&](std::uint64_t i) {
+      glm::vec3 o;
+      for (int a = 0; a < 3; ++a)
+        o[a] = static_cast<float>(b.lo[a] + (double(b.hi[a]) - b.lo[a]) * ToUnit(HashRandom(opt.seed, 21 + a, i)));
+      double z = 1.0 - 2.0 * ToUnit(HashRandom(opt.seed, 24, i));
+      double phi = 2.0 * 3.14159265358979323846 * ToUnit(HashRandom(opt.seed, 25, i));
+      double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+      glm::vec3 d(static_cast<float>(s * std::cos(phi)), static_cast<float>(s * std::sin(phi)), static_cast<float>(z));
+      if (d == glm::vec3(0.0f)) d = glm::vec3(0.0f, 0.0f, 1.0f);
+      rays[i] = Make(o, d, 0.0f, INFINITY);
+    });
+    return rays;
+  }
+
+  // Shadow and diffuse: passes of primary samples (pixel centres, then
+  // jittered) until enough rays exist.
+  const std::uint64_t perPass = std::uint64_t(w) * std::uint64_t(h);
+  for (int pass = 0; pass < 64 && rays.size() < target; ++pass) {
+    std::vector<std::vector<RayRecord>> perRow(static_cast<std::size_t>(h));
+    tbb::parallel_for(0, h, [&](int y) {
+      auto& row = perRow[static_cast<std::size_t>(y)];
+      for (int x = 0; x < w; ++x) {
+        const std::uint64_t sample = std::uint64_t(pass) * perPass + std::uint64_t(y) * w + x;
+        double jx = pass ? ToUnit(HashRandom(opt.seed, 31, sample)) - 0.5 : 0.0;
+        double jy = pass ? ToUnit(HashRandom(opt.seed, 32, sample)) - 0.5 : 0.0;
+        Secondary(scene, tr, opt.kind, PrimaryRay(frame, x + jx, y + jy), opt.seed, sample, row);
+      }
+    });
+    for (auto& row : perRow) rays.insert(rays.end(), row.begin(), row.end());
+  }
+  if (rays.empty())
+    throw InputError(scene.path, 0,
+                     fmt::format("no {} rays: no primary ray hits anything{}", RayKindName(opt.kind),
+                                 opt.kind == RayKind::Shadow ? " that faces a light" : ""));
+  if (rays.size() < target)
+    Warn(fmt::format("{}: only {} {} rays after 64 passes (asked for {})", scene.path, rays.size(),
+                     RayKindName(opt.kind), target));
+  if (rays.size() > target) rays.resize(target);
+  return rays;
+}
+
+}  // namespace cr

@@ -1,0 +1,173 @@
+#include "reference/check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace cr::ref {
+
+namespace {
+
+double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
+
+double Delta(const DRay& r, double t)
+{
+  double tt = std::isfinite(t) ? std::max(t, 0.0) : 0.0;
+  return kCheckRelTol * (MaxAbs(r.o) + tt * MaxAbs(r.d));
+}
+
+// Does the ray meet primitive `prim` (any piece) in [tmin, tmax]?
+bool MeetsPrim(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, std::vector<std::uint32_t>& pieces)
+{
+  tr.PiecesOf(prim, pieces);
+  for (std::uint32_t g : pieces) {
+    double t[2];
+    if (tr.PieceRoots(g, r, t) > 0) return true;
+  }
+  return false;
+}
+
+void Perpendiculars(const glm::dvec3& d, glm::dvec3& e1, glm::dvec3& e2)
+{
+  glm::dvec3 n = glm::normalize(d);
+  glm::dvec3 a = std::fabs(n.x) < 0.6 ? glm::dvec3(1, 0, 0) : (std::fabs(n.y) < 0.6 ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, 1));
+  e1 = glm::normalize(glm::cross(n, a));
+  e2 = glm::cross(n, e1);
+}
+
+// A hit at t on primitive `prim` is marginal when it lies within delta of the
+// ray's ends or when some ray shifted sideways by delta misses the primitive.
+bool Marginal(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, double t, double delta)
+{
+  double dl = glm::length(r.d);
+  if ((t - r.tmin) * dl <= delta || (std::isfinite(r.tmax) && (r.tmax - t) * dl <= delta)) return true;
+  glm::dvec3 e1, e2;
+  Perpendiculars(r.d, e1, e2);
+  std::vector<std::uint32_t> pieces;
+  for (int k = 0; k < 8; ++k) {
+    double a = k * (3.14159265358979323846 / 4.0);
+    DRay s = MakeRay(r.o + delta * (std::cos(a) * e1 + std::sin(a) * e2), r.d, r.tmin, r.tmax);
+    if (!MeetsPrim(tr, prim, s, pieces)) return true;
+  }
+  return false;
+}
+
+// Could primitive `prim` be met by the ray, up to delta?
+bool PossiblyMeets(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, double delta)
+{
+  std::vector<std::uint32_t> pieces;
+  double dl = glm::length(r.d);
+  DRay widened = MakeRay(r.o, r.d, std::max(0.0, r.tmin - delta / dl), r.tmax + delta / dl);
+  if (MeetsPrim(tr, prim, widened, pieces)) return true;
+  glm::dvec3 e1, e2;
+  Perpendiculars(r.d, e1, e2);
+  for (int k = 0; k < 8; ++k) {
+    double a = k * (3.14159265358979323846 / 4.0);
+    DRay s = MakeRay(r.o + delta * (std::cos(a) * e1 + std::sin(a) * e2), r.d, widened.tmin, widened.tmax);
+    if (MeetsPrim(tr, prim, s, pieces)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRecord& hit, bool occlusion, double* relErr,
+                   std::vector<RefHit>& all)
+{
+  const Scene& scene = tr.GetScene();
+  const DRay r = MakeRay(rec);
+  const double dl = glm::length(r.d);
+  *relErr = -1.0;
+  const bool testHit = hit.prim != CR_NO_HIT;
+  if (testHit && hit.prim >= scene.NumPrims()) return Verdict::WrongNotOnPrim;
+
+  if (occlusion) {
+    RefHit any = tr.IntersectP(r);
+    if (testHit) {
+      std::vector<std::uint32_t> pieces;
+      if (MeetsPrim(tr, hit.prim, r, pieces)) return Verdict::Agree;
+      // Scale delta by where the primitive is along the ray.
+      double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
+      return PossiblyMeets(tr, hit.prim, r, Delta(r, far)) ? Verdict::Tie : Verdict::WrongNotOnPrim;
+    }
+    if (!any.Found()) return Verdict::Agree;
+    tr.AllHits(r, all);
+    for (const RefHit& h : all)
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+    return Verdict::Tie;
+  }
+
+  RefHit ref = tr.Intersect(r);
+  if (!testHit) {
+    if (!ref.Found()) return Verdict::Agree;
+    tr.AllHits(r, all);
+    for (const RefHit& h : all)
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+    return Verdict::Tie;
+  }
+  const double t = hit.t;
+  const double delta = Delta(r, t);
+  if (ref.Found() && scene.IdOfUnified(ref.g) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
+    *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
+    return Verdict::Agree;
+  }
+  // The reported point must be on the reported primitive and inside the ray.
+  if (!(t >= r.tmin - delta / dl && (t <= r.tmax + delta / dl))) return Verdict::WrongNotOnPrim;
+  const glm::dvec3 p = r.o + t * r.d;
+  if (!(tr.DistanceToPrim(hit.prim, p) <= delta)) return Verdict::WrongNotOnPrim;
+  // Nothing robust may lie before it.
+  tr.AllHits(r, all);
+  for (const RefHit& h : all) {
+    if ((t - h.t) * dl <= delta) continue;
+    if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongFarther;
+  }
+  return Verdict::Tie;
+}
+
+CheckResult CheckHits(const ReferenceTracer& tr, const std::vector<RayRecord>& rays, const std::vector<HitRecord>& hits,
+                      bool occlusion)
+{
+  CheckResult res;
+  res.rays = rays.size();
+  std::vector<std::uint8_t> verdict(rays.size());
+  std::vector<double> err(rays.size(), -1.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& br) {
+    std::vector<RefHit> scratch;
+    for (std::size_t i = br.begin(); i != br.end(); ++i)
+      verdict[i] = static_cast<std::uint8_t>(Adjudicate(tr, rays[i], hits[i], occlusion, &err[i], scratch));
+  });
+  double sumErr = 0.0;
+  std::uint64_t nErr = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    auto v = static_cast<Verdict>(verdict[i]);
+    switch (v) {
+      case Verdict::Agree: ++res.agree; break;
+      case Verdict::Tie: ++res.ties; break;
+      case Verdict::WrongMissed: ++res.wrongMissed; break;
+      case Verdict::WrongFarther: ++res.wrongFarther; break;
+      case Verdict::WrongNotOnPrim: ++res.wrongNotOnPrim; break;
+    }
+    if (v != Verdict::Agree && v != Verdict::Tie) {
+      ++res.wrong;
+      if (res.firstWrong.size() < 16) {
+        res.firstWrong.push_back(i);
+        res.firstWrongWhy.push_back(v == Verdict::WrongMissed    ? "missed a surface"
+                                    : v == Verdict::WrongFarther ? "a nearer surface exists"
+                                                                 : "not an intersection of that primitive");
+      }
+    }
+    if (err[i] >= 0.0) {
+      res.maxRelTErr = std::max(res.maxRelTErr, err[i]);
+      sumErr += err[i];
+      ++nErr;
+    }
+  }
+  res.meanRelTErr = nErr ? sumErr / double(nErr) : 0.0;
+  return res;
+}
+
+}  // namespace cr::ref

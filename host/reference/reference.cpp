@@ -1,0 +1,245 @@
+#include "reference/reference.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "core/error.h"
+
+namespace cr::ref {
+
+namespace {
+constexpr std::uint32_t kLeafSize = 4;
+// Ize 2013: scaling the far slab distance by 1 + 2 gamma(3) makes the double
+// slab test conservative.
+constexpr double kFarScale = 1.0 + 2.0 * (3.0 * 0x1p-53) / (1.0 - 3.0 * 0x1p-53);
+
+glm::dvec3 Down(const glm::dvec3& v) { return {std::nextafter(v.x, -INFINITY), std::nextafter(v.y, -INFINITY), std::nextafter(v.z, -INFINITY)}; }
+glm::dvec3 Up(const glm::dvec3& v) { return {std::nextafter(v.x, INFINITY), std::nextafter(v.y, INFINITY), std::nextafter(v.z, INFINITY)}; }
+}  // namespace
+
+ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), counts_(scene.Counts())
+{
+  const std::uint32_t n = scene.NumUnified();
+  std::vector<glm::dvec3> lo(n), hi(n);
+  for (std::uint32_t g = 0; g < n; ++g) {
+    if (g < counts_.nSpheres) {
+      const Sphere& s = scene.spheres[g];
+      lo[g] = Down(D3(s.center) - double(s.radius));
+      hi[g] = Up(D3(s.center) + double(s.radius));
+    } else if (g < counts_.nSpheres + counts_.nTriangles) {
+      const Triangle& t = scene.triangles[g - counts_.nSpheres];
+      lo[g] = glm::min(D3(t.v0), glm::min(D3(t.v1), D3(t.v2)));
+      hi[g] = glm::max(D3(t.v0), glm::max(D3(t.v1), D3(t.v2)));
+    } else {
+      // Box of the two end discs, padded.
+      const Cone& c = scene.cones[g - counts_.nSpheres - counts_.nTriangles];
+      glm::dvec3 p0 = D3(c.base), p1 = D3(c.apex), w = glm::normalize(p1 - p0);
+      glm::dvec3 e = glm::sqrt(glm::max(glm::dvec3(1.0) - w * w, glm::dvec3(0.0)));
+      glm::dvec3 l = glm::min(p0 - e * double(c.baseRadius), p1 - e * double(c.apexRadius));
+      glm::dvec3 h = glm::max(p0 + e * double(c.baseRadius), p1 + e * double(c.apexRadius));
+      glm::dvec3 pad = (h - l) * 1e-9 + (glm::abs(l) + glm::abs(h)) * 1e-12;
+      lo[g] = l - pad;
+      hi[g] = h + pad;
+    }
+  }
+  order_.resize(n);
+  std::iota(order_.begin(), order_.end(), 0u);
+  nodes_.reserve(n ? 2 * n / kLeafSize + 2 : 1);
+  if (n == 0) {
+    nodes_.push_back(Node{glm::dvec3(0.0), glm::dvec3(-1.0), 0, 0});
+    return;
+  }
+  Build(0, n, lo, hi, 0);
+}
+
+std::uint32_t ReferenceTracer::Build(std::uint32_t begin, std::uint32_t end, std::vector<glm::dvec3>& lo,
+                                     std::vector<glm::dvec3>& hi, int depth)
+{
+  const auto index = static_cast<std::uint32_t>(nodes_.size());
+  nodes_.push_back(Node{});
+  glm::dvec3 blo(INFINITY), bhi(-INFINITY), clo(INFINITY), chi(-INFINITY);
+  for (std::uint32_t i = begin; i < end; ++i) {
+    std::uint32_t g = order_[i];
+    blo = glm::min(blo, lo[g]);
+    bhi = glm::max(bhi, hi[g]);
+    glm::dvec3 c = 0.5 * (lo[g] + hi[g]);
+    clo = glm::min(clo, c);
+    chi = glm::max(chi, c);
+  }
+  nodes_[index].lo = blo;
+  nodes_[index].hi = bhi;
+  const std::uint32_t n = end - begin;
+  glm::dvec3 ext = chi - clo;
+  int axis = ext.x > ext.y ? (ext.x > ext.z ? 0 : 2) : (ext.y > ext.z ? 1 : 2);
+  if (n <= kLeafSize || ext[axis] == 0.0 || depth > 100) {
+    nodes_[index].first = begin;
+    nodes_[index].count = n;
+    return index;
+  }
+  std::uint32_t mid = begin + n / 2;
+  std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                   [&](std::uint32_t a, std::uint32_t b) {
+                     double ca = lo[a][axis] + hi[a][axis], cb = lo[b][axis] + hi[b][axis];
+                     return ca < cb || (ca == cb && a < b);
+                   });
+  Build(begin, mid, lo, hi, depth + 1);
+  std::uint32_t right = Build(mid, end, lo, hi, depth + 1);
+  nodes_[index].first = right;
+  nodes_[index].count = 0;
+  return index;
+}
+
+template <typename Visit>
+void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) const
+{
+  std::uint32_t stack[256];
+  int sp = 0;
+  stack[sp++] = 0;
+  while (sp > 0) {
+    const Node& node = nodes_[stack[--sp]];
+    double tn = ray.tmin, tf = tmax;
+    double bn = -INFINITY, bf = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+      double t0 = (node.lo[a] - ray.o[a]) * ray.inv[a];
+      double t1 = (node.hi[a] - ray.o[a]) * ray.inv[a];
+      if (ray.inv[a] < 0.0) std::swap(t0, t1);
+      bn = std::fmax(bn, t0);
+      bf = std::fmin(bf, t1);
+    }
+    tn = std::fmax(tn, bn);
+    tf = std::fmin(tf, bf * kFarScale);
+    if (!(tn <= tf)) continue;
+    if (node.count > 0) {
+      for (std::uint32_t i = 0; i < node.count; ++i)
+        if (visit(order_[node.first + i])) return;
+    } else {
+      const std::uint32_t idx = static_cast<std::uint32_t>(&node - nodes_.data());
+      if (sp + 2 > 256) throw RuntimeError("reference BVH deeper than its stack");
+      stack[sp++] = node.first;
+      stack[sp++] = idx + 1;
+    }
+  }
+}
+
+int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u, double* v) const
+{
+  if (g < counts_.nSpheres) return SphereRoots(ray, scene_.spheres[g], t);
+  if (g < counts_.nSpheres + counts_.nTriangles)
+    return TriangleRoots(ray, scene_.triangles[g - counts_.nSpheres], t, u, v);
+  return ConeRoots(ray, scene_.cones[g - counts_.nSpheres - counts_.nTriangles], t);
+}
+
+RefHit ReferenceTracer::Intersect(const DRay& ray) const
+{
+  RefHit best;
+  double tmax = ray.tmax;
+  Traverse(ray, tmax, [&](std::uint32_t g) {
+    double t[2], u = 0.0, v = 0.0;
+    int n = PieceRoots(g, ray, t, &u, &v);
+    if (n > 0 && (t[0] < best.t || (t[0] == best.t && g < best.g))) {
+      best.t = t[0];
+      best.g = g;
+      best.u = u;
+      best.v = v;
+      tmax = t[0];
+    }
+    return false;
+  });
+  return best;
+}
+
+RefHit ReferenceTracer::IntersectP(const DRay& ray) const
+{
+  RefHit any;
+  double tmax = ray.tmax;
+  Traverse(ray, tmax, [&](std::uint32_t g) {
+    double t[2];
+    if (PieceRoots(g, ray, t) > 0) {
+      any.t = t[0];
+      any.g = g;
+      return true;
+    }
+    return false;
+  });
+  return any;
+}
+
+void ReferenceTracer::AllHits(const DRay& ray, std::vector<RefHit>& out) const
+{
+  out.clear();
+  double tmax = ray.tmax;
+  Traverse(ray, tmax, [&](std::uint32_t g) {
+    double t[2], u = 0.0, v = 0.0;
+    int n = PieceRoots(g, ray, t, &u, &v);
+    for (int i = 0; i < n; ++i) out.push_back(RefHit{t[i], u, v, g});
+    return false;
+  });
+}
+
+void ReferenceTracer::PiecesOf(std::uint32_t prim, std::vector<std::uint32_t>& out) const
+{
+  out.clear();
+  if (prim >= scene_.NumPrims()) return;
+  const PrimInfo& info = scene_.prims[prim];
+  std::uint32_t base = 0;
+  if (info.kind == PrimKind::kSphere) base = 0;
+  else if (info.kind == PrimKind::kCone) base = counts_.nSpheres + counts_.nTriangles;
+  else base = counts_.nSpheres;
+  for (std::uint32_t i = 0; i < info.nPieces; ++i) out.push_back(base + info.firstPiece + i);
+}
+
+double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) const
+{
+  std::vector<std::uint32_t> pieces;
+  PiecesOf(prim, pieces);
+  double best = INFINITY;
+  for (std::uint32_t g : pieces) {
+    double d;
+    if (g < counts_.nSpheres) d = SphereDistance(scene_.spheres[g], p);
+    else if (g < counts_.nSpheres + counts_.nTriangles) d = TriangleDistance(scene_.triangles[g - counts_.nSpheres], p);
+    else d = ConeDistance(scene_.cones[g - counts_.nSpheres - counts_.nTriangles], p);
+    best = std::min(best, d);
+  }
+  return best;
+}
+
+glm::dvec3 ReferenceTracer::GeometricNormal(std::uint32_t g, const glm::dvec3& p) const
+{
+  if (g < counts_.nSpheres) return SphereNormal(scene_.spheres[g], p);
+  if (g < counts_.nSpheres + counts_.nTriangles) return glm::normalize(TriangleNormal(scene_.triangles[g - counts_.nSpheres]));
+  return ConeNormal(scene_.cones[g - counts_.nSpheres - counts_.nTriangles], p);
+}
+
+glm::dvec3 ReferenceTracer::ShadingNormal(std::uint32_t g, const glm::dvec3& p, double u, double v) const
+{
+  glm::dvec3 ng = GeometricNormal(g, p);
+  if (g >= counts_.nSpheres && g < counts_.nSpheres + counts_.nTriangles && scene_.HasPatchNormals()) {
+    const TriNormals& n = scene_.triNormals[g - counts_.nSpheres];
+    glm::dvec3 ns = (1.0 - u - v) * glm::dvec3(n[0]) + u * glm::dvec3(n[1]) + v * glm::dvec3(n[2]);
+    double len = glm::length(ns);
+    if (len > 0.0) return ns / len;
+  }
+  return ng;
+}
+
+HitRecord ReferenceTracer::ToRecord(const RefHit& h, bool occlusion) const
+{
+  HitRecord r{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+  if (!h.Found()) return r;
+  r.prim = scene_.IdOfUnified(h.g);
+  if (occlusion) {
+    r.t = 0.0f;
+    return r;
+  }
+  r.t = static_cast<float>(h.t);
+  if (h.g >= counts_.nSpheres && h.g < counts_.nSpheres + counts_.nTriangles &&
+      (scene_.triangles[h.g - counts_.nSpheres].flags & CR_TRI_REPORT_UV)) {
+    r.u = static_cast<float>(h.u);
+    r.v = static_cast<float>(h.v);
+  }
+  return r;
+}
+
+}  // namespace cr::ref

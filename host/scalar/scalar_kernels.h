@@ -1,0 +1,39 @@
+// The kernels of kernels/ compiled as C++: one namespace per precision mode
+// (and a statistics-gathering twin of each), all with the same entry point.
+// This is the `scalar` backend and the oracle the OpenCL build is checked
+// against.
+#pragma once
+
+#include <cstddef>
+
+#include "accel/accel.h"
+#include "kernels/types.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+struct KernelArgs {
+  AccelKind accel = AccelKind::BVH;
+  const AccelData* data = nullptr;
+  PrimCounts counts{};
+  const Sphere* spheres = nullptr;
+  const Triangle* triangles = nullptr;
+  const Cone* cones = nullptr;
+  const std::uint32_t* primIds = nullptr;  // by unified index
+  const RayRecord* rays = nullptr;
+  HitRecord* hits = nullptr;
+};
+
+#define CR_DECLARE_KERNEL_NS(ns)                                                                              \
+  namespace ns {                                                                                              \
+  void TraceRange(const KernelArgs& args, std::size_t begin, std::size_t end, bool occlusion, TraceStatsSum* sum); \
+  }
+CR_DECLARE_KERNEL_NS(k_robust)
+CR_DECLARE_KERNEL_NS(k_robust_stats)
+CR_DECLARE_KERNEL_NS(k_fast)
+CR_DECLARE_KERNEL_NS(k_fast_stats)
+CR_DECLARE_KERNEL_NS(k_fp64)
+CR_DECLARE_KERNEL_NS(k_fp64_stats)
+#undef CR_DECLARE_KERNEL_NS
+
+}  // namespace cr

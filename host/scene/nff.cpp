@@ -1,0 +1,269 @@
+// NFF (Neutral File Format, Eric Haines) reader: v, b, l, f, s, c, p, pp, #.
+// Statements are read as a token stream (so `c` may span one or two lines),
+// except the optional colour of `l`, which must be on the light's line.
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/file_util.h"
+#include "scene/scene.h"
+
+namespace cr {
+
+namespace {
+
+struct Token {
+  std::string_view text;
+  long line = 0;
+};
+
+class Lexer {
+ public:
+  Lexer(std::string_view text, const std::string& name) : text_(text), name_(name) {}
+
+  // Next token, or nullopt at the end of the text.
+  std::optional<Token> Next()
+  {
+    SkipSpace();
+    if (pos_ >= text_.size()) return std::nullopt;
+    std::size_t b = pos_;
+    while (pos_ < text_.size() && !IsSpace(text_[pos_]) && text_[pos_] != '#') ++pos_;
+    return Token{text_.substr(b, pos_ - b), line_};
+  }
+  // True when another token follows on the current line.
+  bool MoreOnLine()
+  {
+    while (pos_ < text_.size() && (text_[pos_] == ' ' || text_[pos_] == '\t' || text_[pos_] == '\r')) ++pos_;
+    return pos_ < text_.size() && text_[pos_] != '\n' && text_[pos_] != '#';
+  }
+  long Line() const { return line_; }
+  const std::string& Name() const { return name_; }
+
+  [[noreturn]] void Fail(long line, const std::string& what) const { throw InputError(name_, line, what); }
+
+  // Reads one number belonging to `stmt` (started at stmtLine); `what` names it.
+  double Number(const char* stmt, long stmtLine, const char* what)
+  {
+    auto tok = Next();
+    if (!tok)
+      Fail(Line(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
+                               stmtLine, what));
+    return ParseNumber(*tok, stmt, what);
+  }
+
+  double ParseNumber(const Token& tok, const char* stmt, const char* what) const
+  {
+    std::string_view s = tok.text;
+    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+    double v = 0.0;
+    auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec == std::errc::result_out_of_range)
+      Fail(tok.line, fmt::format("'{}': {} '{}' is out of range", stmt, what, tok.text));
+    if (ec != std::errc() || ptr != s.data() + s.size() || s.empty())
+      Fail(tok.line, fmt::format("'{}': expected a number for {}, got '{}'", stmt, what, tok.text));
+    if (!std::isfinite(v)) Fail(tok.line, fmt::format("'{}': {} is not a finite number: '{}'", stmt, what, tok.text));
+    if (std::fabs(v) > double(std::numeric_limits<float>::max()))
+      Fail(tok.line, fmt::format("'{}': {} '{}' does not fit in a float", stmt, what, tok.text));
+    return v;
+  }
+
+  long Integer(const char* stmt, long stmtLine, const char* what)
+  {
+    auto tok = Next();
+    if (!tok)
+      Fail(Line(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
+                               stmtLine, what));
+    long v = 0;
+    auto [ptr, ec] = std::from_chars(tok->text.data(), tok->text.data() + tok->text.size(), v);
+    if (ec != std::errc() || ptr != tok->text.data() + tok->text.size())
+      Fail(tok->line, fmt::format("'{}': expected an integer for {}, got '{}'", stmt, what, tok->text));
+    return v;
+  }
+
+  void Keyword(const char* expected, long stmtLine)
+  {
+    auto tok = Next();
+    if (!tok)
+      Fail(Line(), fmt::format("truncated 'v' block (started on line {}): end of file where '{}' was expected", stmtLine,
+                               expected));
+    if (tok->text != expected)
+      Fail(tok->line, fmt::format("'v' block: expected '{}', got '{}'", expected, tok->text));
+  }
+
+ private:
+  static bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+  void SkipSpace()
+  {
+    while (pos_ < text_.size()) {
+      char c = text_[pos_];
+      if (c == '\n') {
+        ++line_;
+        ++pos_;
+      } else if (IsSpace(c)) {
+        ++pos_;
+      } else if (c == '#') {
+        while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+      } else {
+        break;
+      }
+    }
+  }
+
+  std::string_view text_;
+  std::string name_;
+  std::size_t pos_ = 0;
+  long line_ = 1;
+};
+
+glm::dvec3 Vec(Lexer& lx, const char* stmt, long line, const char* what)
+{
+  double x = lx.Number(stmt, line, what);
+  double y = lx.Number(stmt, line, what);
+  double z = lx.Number(stmt, line, what);
+  return {x, y, z};
+}
+
+glm::vec3 F(const glm::dvec3& v) { return glm::vec3(v); }
+
+}  // namespace
+
+void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool viewOnly)
+{
+  Lexer lx(text, name);
+  if (scene.materials.empty()) scene.materials.push_back(Material{});
+  std::uint32_t material = 0;
+  bool anyStatement = false;
+  while (auto tok = lx.Next()) {
+    const long line = tok->line;
+    const std::string_view kw = tok->text;
+    anyStatement = true;
+    const bool geometry = kw == "s" || kw == "c" || kw == "p" || kw == "pp";
+    if (viewOnly && (geometry || kw == "f"))
+      lx.Fail(line, fmt::format("'{}' statement in a view file (only v, b, l and comments belong there)", kw));
+    if (kw == "v") {
+      Camera cam;
+      lx.Keyword("from", line);
+      cam.from = F(Vec(lx, "v", line, "a 'from' coordinate"));
+      lx.Keyword("at", line);
+      cam.at = F(Vec(lx, "v", line, "an 'at' coordinate"));
+      lx.Keyword("up", line);
+      cam.up = F(Vec(lx, "v", line, "an 'up' coordinate"));
+      lx.Keyword("angle", line);
+      cam.angle = float(lx.Number("v", line, "the angle"));
+      lx.Keyword("hither", line);
+      cam.hither = float(lx.Number("v", line, "the hither distance"));
+      lx.Keyword("resolution", line);
+      long w = lx.Integer("v", line, "the x resolution");
+      long h = lx.Integer("v", line, "the y resolution");
+      if (!(cam.angle > 0.0f && cam.angle < 180.0f))
+        lx.Fail(line, fmt::format("'v': angle {} is not in (0, 180) degrees", cam.angle));
+      if (cam.hither < 0.0f) lx.Fail(line, fmt::format("'v': hither {} is negative", cam.hither));
+      if (w < 1 || h < 1 || w > 65536 || h > 65536)
+        lx.Fail(line, fmt::format("'v': resolution {} x {} is not in 1..65536", w, h));
+      glm::dvec3 fwd = glm::dvec3(cam.at) - glm::dvec3(cam.from);
+      if (glm::length(fwd) == 0.0) lx.Fail(line, "'v': 'from' and 'at' are the same point");
+      if (glm::length(glm::cross(fwd, glm::dvec3(cam.up))) == 0.0)
+        lx.Fail(line, "'v': 'up' is zero or parallel to the view direction");
+      cam.width = int(w);
+      cam.height = int(h);
+      scene.camera = cam;
+      scene.hasCamera = true;
+    } else if (kw == "b") {
+      scene.background = F(Vec(lx, "b", line, "a background colour component"));
+    } else if (kw == "l") {
+      Light l;
+      l.position = F(Vec(lx, "l", line, "a light coordinate"));
+      if (lx.MoreOnLine()) l.color = F(Vec(lx, "l", line, "a light colour component"));
+      scene.lights.push_back(l);
+    } else if (kw == "f") {
+      Material m;
+      m.color = F(Vec(lx, "f", line, "a colour component"));
+      m.kd = float(lx.Number("f", line, "Kd"));
+      m.ks = float(lx.Number("f", line, "Ks"));
+      m.shine = float(lx.Number("f", line, "the Phong exponent"));
+      m.transmittance = float(lx.Number("f", line, "the transmittance T"));
+      m.ior = float(lx.Number("f", line, "the index of refraction"));
+      if (m.ior < 0.0f) lx.Fail(line, fmt::format("'f': index of refraction {} is negative", m.ior));
+      scene.materials.push_back(m);
+      material = static_cast<std::uint32_t>(scene.materials.size() - 1);
+    } else if (kw == "s") {
+      glm::dvec3 c = Vec(lx, "s", line, "a centre coordinate");
+      double r = lx.Number("s", line, "the radius");
+      PrimInfo info;
+      info.kind = PrimKind::kSphere;
+      info.material = material;
+      info.line = static_cast<std::uint32_t>(line);
+      info.insideVisible = r < 0.0;
+      const auto id = scene.NumPrims();
+      float rf = float(std::fabs(r));
+      if (rf == 0.0f) {
+        Warn(fmt::format("{}:{}: sphere of radius 0: skipped, id {} kept", name, line, id));
+      } else {
+        info.firstPiece = static_cast<std::uint32_t>(scene.spheres.size());
+        info.nPieces = 1;
+        scene.spheres.push_back(Sphere{{float(c.x), float(c.y), float(c.z)}, rf});
+        scene.sphereIds.push_back(id);
+      }
+      scene.prims.push_back(info);
+    } else if (kw == "c") {
+      glm::dvec3 b = Vec(lx, "c", line, "a base coordinate");
+      double rb = lx.Number("c", line, "the base radius");
+      glm::dvec3 a = Vec(lx, "c", line, "an apex coordinate");
+      double ra = lx.Number("c", line, "the apex radius");
+      PrimInfo info;
+      info.kind = PrimKind::kCone;
+      info.material = material;
+      info.line = static_cast<std::uint32_t>(line);
+      info.insideVisible = rb < 0.0 || ra < 0.0;
+      if ((rb < 0.0) != (ra < 0.0) && rb != 0.0 && ra != 0.0)
+        Warn(fmt::format("{}:{}: cone radii of opposite signs: treated as inside-visible", name, line));
+      const auto id = scene.NumPrims();
+      Cone cn{{float(b.x), float(b.y), float(b.z)}, float(std::fabs(rb)), {float(a.x), float(a.y), float(a.z)},
+              float(std::fabs(ra))};
+      bool sameEnds = cn.base[0] == cn.apex[0] && cn.base[1] == cn.apex[1] && cn.base[2] == cn.apex[2];
+      if (sameEnds || (cn.baseRadius == 0.0f && cn.apexRadius == 0.0f)) {
+        Warn(fmt::format("{}:{}: degenerate cone ({}): skipped, id {} kept", name, line,
+                         sameEnds ? "base and apex coincide" : "both radii are 0", id));
+      } else {
+        info.firstPiece = static_cast<std::uint32_t>(scene.cones.size());
+        info.nPieces = 1;
+        scene.cones.push_back(cn);
+        scene.coneIds.push_back(id);
+      }
+      scene.prims.push_back(info);
+    } else if (kw == "p" || kw == "pp") {
+      const bool patch = kw == "pp";
+      const char* stmt = patch ? "pp" : "p";
+      long n = lx.Integer(stmt, line, "the vertex count");
+      if (n < 0) lx.Fail(line, fmt::format("'{}': negative vertex count {}", stmt, n));
+      std::vector<glm::dvec3> verts;
+      std::vector<glm::vec3> normals;
+      for (long i = 0; i < n; ++i) {
+        verts.push_back(Vec(lx, stmt, line, "a vertex coordinate"));
+        if (patch) normals.push_back(F(Vec(lx, stmt, line, "a vertex normal component")));
+      }
+      AddPolygon(scene, patch ? PrimKind::kPatch : PrimKind::kPolygon, verts, patch ? &normals : nullptr, material,
+                 static_cast<std::uint32_t>(line), name);
+    } else {
+      lx.Fail(line, fmt::format("unknown statement '{}'", kw));
+    }
+  }
+  if (!anyStatement) throw InputError(name, 0, viewOnly ? "empty view file" : "empty scene file");
+}
+
+Scene LoadNFF(const std::string& path)
+{
+  std::vector<char> data = ReadFile(path);
+  Scene scene;
+  scene.path = path;
+  ParseNFF(std::string_view(data.data(), data.size()), path, scene, false);
+  if (scene.prims.empty()) throw InputError(path, 0, "no geometry: the scene has no s, c, p or pp statement");
+  if (!scene.hasCamera) Warn(fmt::format("{}: no 'v' block: using a default camera", path));
+  return scene;
+}
+
+}  // namespace cr

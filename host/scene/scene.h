@@ -1,0 +1,131 @@
+// The scene model: camera, background, lights, materials and primitives, in
+// the form every backend uploads (the per-type arrays of kernels/types.h).
+//
+// Primitive ids are those of ../shared/FORMATS.md: the 0-based position of a
+// geometry statement in the file (NFF s/c/p/pp, OBJ f). A statement that is
+// degenerate (a polygon of < 3 vertices or zero area, a sphere of radius 0)
+// keeps its id but has no geometry. Polygons and patches are split into
+// triangles ("pieces") that all report their statement's id.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "kernels/types.h"
+
+namespace cr {
+
+struct Camera {
+  glm::vec3 from{0.0f, 0.0f, 1.0f};
+  glm::vec3 at{0.0f, 0.0f, 0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float angle = 45.0f;  // degrees, between the centres of the outer pixel rows
+  float hither = 0.0f;  // distance of the near plane along the view direction
+  int width = 512;
+  int height = 512;
+};
+
+struct Light {
+  glm::vec3 position{0.0f};
+  glm::vec3 color{1.0f};
+};
+
+// NFF `f`: colour, diffuse Kd, specular Ks, Phong exponent, transmittance T,
+// index of refraction.
+struct Material {
+  glm::vec3 color{1.0f};
+  float kd = 1.0f;
+  float ks = 0.0f;
+  float shine = 0.0f;
+  float transmittance = 0.0f;
+  float ior = 1.0f;
+};
+
+enum class PrimKind : std::uint8_t { kSphere, kCone, kPolygon, kPatch, kFace };
+const char* PrimKindName(PrimKind kind);
+
+// One geometry statement (one primitive id).
+struct PrimInfo {
+  PrimKind kind = PrimKind::kSphere;
+  bool insideVisible = false;  // NFF negative radius
+  std::uint32_t material = 0;
+  std::uint32_t line = 0;        // line of the statement in its file
+  std::uint32_t firstPiece = 0;  // index into spheres, cones or triangles
+  std::uint32_t nPieces = 0;     // 0: degenerate, no geometry
+};
+
+// Vertex normals of a patch piece (zero vectors for flat pieces).
+using TriNormals = std::array<glm::vec3, 3>;
+
+struct Bounds {
+  glm::vec3 lo{INFINITY};
+  glm::vec3 hi{-INFINITY};
+  void Extend(const glm::vec3& p)
+  {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void Extend(const Bounds& b)
+  {
+    lo = glm::min(lo, b.lo);
+    hi = glm::max(hi, b.hi);
+  }
+  bool Empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
+  glm::vec3 Extent() const { return hi - lo; }
+};
+
+struct Scene {
+  std::string path;
+  Camera camera;
+  bool hasCamera = false;
+  glm::vec3 background{0.0f};
+  std::vector<Light> lights;
+  std::vector<Material> materials;  // materials[0] is the default
+  std::vector<PrimInfo> prims;      // indexed by primitive id
+
+  std::vector<Sphere> spheres;
+  std::vector<std::uint32_t> sphereIds;
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> triangleIds;
+  std::vector<TriNormals> triNormals;  // per triangle when any patch exists, else empty
+  std::vector<Cone> cones;
+  std::vector<std::uint32_t> coneIds;
+
+  std::uint32_t NumPrims() const { return static_cast<std::uint32_t>(prims.size()); }
+  std::uint32_t NumUnified() const;
+  PrimCounts Counts() const;
+  // Primitive id of unified index g (spheres, then triangles, then cones).
+  std::uint32_t IdOfUnified(std::uint32_t g) const;
+  // Scene-file id of every unified index, in order.
+  std::vector<std::uint32_t> UnifiedIds() const;
+  // Tight bounds of primitive g / of all geometry.
+  Bounds UnifiedBounds(std::uint32_t g) const;
+  Bounds WorldBounds() const;
+  // Statement counts by kind (tests assert them against the SPD table).
+  std::uint32_t CountKind(PrimKind kind) const;
+  bool HasPatchNormals() const { return !triNormals.empty(); }
+  const Material& MaterialOf(std::uint32_t primId) const { return materials[prims[primId].material]; }
+};
+
+// Loads .nff, or .obj with an NFF-style .view file beside it (camera, lights,
+// background). Throws InputError for malformed input.
+Scene LoadScene(const std::string& path);
+Scene LoadNFF(const std::string& path);
+Scene LoadOBJ(const std::string& path);
+
+// Parses an NFF text (used by LoadNFF and by tests on in-memory snippets).
+// `name` is used in messages. With viewOnly, geometry statements are errors
+// (an OBJ's .view file holds only v, b, l and comments).
+void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool viewOnly = false);
+
+// Adds a polygon (or patch, with normals) statement, triangulating it; used by
+// the loaders. Returns false (after a warning) when it is degenerate.
+bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& verts,
+                const std::vector<glm::vec3>* normals, std::uint32_t material, std::uint32_t line,
+                const std::string& file, bool warnIfDegenerate = true);
+
+}  // namespace cr

@@ -1,0 +1,14 @@
+// Backends that have not landed yet.
+#include "core/error.h"
+#include "trace/tracer.h"
+
+namespace cr {
+std::unique_ptr<Tracer> CreateSimdTracer(const Scene&, const TraceConfig&)
+{
+  throw RuntimeError("--backend simd: not implemented yet");
+}
+std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene&, const TraceConfig&)
+{
+  throw RuntimeError("--backend opencl: not implemented yet");
+}
+}  // namespace cr

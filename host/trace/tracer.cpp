@@ -1,0 +1,98 @@
+#include "trace/tracer.h"
+
+#include <chrono>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "reference/reference.h"
+
+namespace cr {
+
+Backend ParseBackend(const std::string& s)
+{
+  if (s == "reference") return Backend::Reference;
+  if (s == "scalar") return Backend::Scalar;
+  if (s == "simd") return Backend::Simd;
+  if (s == "opencl") return Backend::OpenCL;
+  throw InputError(fmt::format("unknown backend '{}' (expected reference, scalar, simd or opencl)", s));
+}
+
+const char* BackendName(Backend b)
+{
+  switch (b) {
+    case Backend::Reference: return "reference";
+    case Backend::Scalar: return "scalar";
+    case Backend::Simd: return "simd";
+    case Backend::OpenCL: return "opencl";
+  }
+  return "?";
+}
+
+Precision ParsePrecision(const std::string& s)
+{
+  if (s == "fast") return Precision::Fast;
+  if (s == "robust") return Precision::Robust;
+  if (s == "fp64") return Precision::Fp64;
+  throw InputError(fmt::format("unknown precision '{}' (expected fast, robust or fp64)", s));
+}
+
+const char* PrecisionName(Precision p)
+{
+  switch (p) {
+    case Precision::Fast: return "fast";
+    case Precision::Robust: return "robust";
+    case Precision::Fp64: return "fp64";
+  }
+  return "?";
+}
+
+namespace {
+
+// The fp64 reference as a backend (its own BVH; the accel choice is ignored).
+class ReferenceBackend final : public Tracer {
+ public:
+  explicit ReferenceBackend(const Scene& scene)
+  {
+    auto t0 = std::chrono::steady_clock::now();
+    tracer_ = std::make_unique<ref::ReferenceTracer>(scene);
+    info_.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    info_.nodes = tracer_->NodeCount();
+    info_.params = "fp64 median-split bvh";
+  }
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum*) override
+  {
+    hits.resize(rays.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        ref::DRay ray = ref::MakeRay(rays[i]);
+        hits[i] = tracer_->ToRecord(occlusion ? tracer_->IntersectP(ray) : tracer_->Intersect(ray), occlusion);
+      }
+    });
+  }
+  std::string DeviceName() const override { return "cpu (fp64 reference)"; }
+
+ private:
+  std::unique_ptr<ref::ReferenceTracer> tracer_;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig& config);
+std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config);
+std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config);
+
+std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
+{
+  switch (config.backend) {
+    case Backend::Reference: return std::make_unique<ReferenceBackend>(scene);
+    case Backend::Scalar: return CreateScalarTracer(scene, config);
+    case Backend::Simd: return CreateSimdTracer(scene, config);
+    case Backend::OpenCL: return CreateOpenCLTracer(scene, config);
+  }
+  throw RuntimeError("unknown backend");
+}
+
+}  // namespace cr

@@ -1,0 +1,72 @@
+// A tracer is a backend with its structure built and its scene uploaded. Every
+// backend (reference, scalar, simd, opencl) implements the same interface, so
+// trace, check, bench and render treat them alike.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "accel/accel.h"
+#include "kernels/types.h"
+#include "scene/scene.h"
+
+namespace cr {
+
+enum class Backend { Reference, Scalar, Simd, OpenCL };
+Backend ParseBackend(const std::string& s);  // InputError on unknown names
+const char* BackendName(Backend b);
+
+enum class Precision { Fast, Robust, Fp64 };
+Precision ParsePrecision(const std::string& s);
+const char* PrecisionName(Precision p);
+
+struct TraceConfig {
+  Backend backend = Backend::Scalar;
+  AccelKind accel = AccelKind::BVH;
+  Precision precision = Precision::Robust;
+  AccelParams params;
+  int threads = 0;          // 0: all cores
+  bool stats = false;       // gather Havran's per-ray measures
+  std::string isa;          // simd: avx2 | sse4 | scalar, empty: best available
+  std::string device;       // opencl: "N" or "platform:device", empty: default
+  std::string variant;      // traversal variant (e.g. ray | packet), empty: default
+};
+
+// Sums of the per-ray measures over a batch.
+struct TraceStatsSum {
+  std::uint64_t rays = 0;
+  std::uint64_t nIT = 0;
+  std::uint64_t nTS = 0;
+  std::uint64_t nLeaves = 0;
+  std::uint64_t nEmptyLeaves = 0;
+  void Add(const TraceStatsSum& o)
+  {
+    rays += o.rays;
+    nIT += o.nIT;
+    nTS += o.nTS;
+    nLeaves += o.nLeaves;
+    nEmptyLeaves += o.nEmptyLeaves;
+  }
+};
+
+class Tracer {
+ public:
+  virtual ~Tracer() = default;
+  // hits[i] answers rays[i] (closest hit, or occlusion per FORMATS.md). stats
+  // is filled only when the tracer was created with stats on.
+  virtual void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+                     TraceStatsSum* stats) = 0;
+  virtual std::string DeviceName() const = 0;
+  // What actually ran (e.g. "avx2 packet"), for the JSON output.
+  virtual std::string VariantName() const { return ""; }
+  const AccelInfo& Info() const { return info_; }
+
+ protected:
+  AccelInfo info_;
+};
+
+std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config);
+
+}  // namespace cr

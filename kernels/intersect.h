@@ -1,0 +1,307 @@
+/* Ray-primitive intersection, shared by every structure and backend.
+ *
+ * Precision modes (macros):
+ *   default  `robust`: watertight triangles (Woop, Benthin & Wald 2013), the
+ *            stable sphere quadratic (Hearn & Baker 14-6; Haines et al., Ray
+ *            Tracing Gems ch. 7: the discriminant from |f x d|, the roots as
+ *            q/a and c/q), conservative slab tests (Ize 2013);
+ *   CR_FAST  `fast`: Moller-Trumbore with a fixed determinant epsilon, the
+ *            textbook quadratic, plain slab tests;
+ *   CR_FP64  `fp64`: the robust algorithms with real = double.
+ * Model only what the scene needs: CR_HAS_SPHERES / CR_HAS_TRIANGLES /
+ * CR_HAS_CONES (default 1) remove the code of absent primitive types. */
+#ifndef CELLRAY_KERNELS_INTERSECT_H
+#define CELLRAY_KERNELS_INTERSECT_H
+#include "ray.h"
+
+#ifndef CR_HAS_SPHERES
+#define CR_HAS_SPHERES 1
+#endif
+#ifndef CR_HAS_TRIANGLES
+#define CR_HAS_TRIANGLES 1
+#endif
+#ifndef CR_HAS_CONES
+#define CR_HAS_CONES 1
+#endif
+
+/* The primitive arrays of a scene, unified index g as in types.h. */
+typedef struct {
+  CR_GLOBAL const Sphere* spheres;
+  CR_GLOBAL const Triangle* triangles;
+  CR_GLOBAL const Cone* cones;
+  uint nSpheres;
+  uint nTriangles;
+  uint nCones;
+} PrimView;
+
+/* Roots of a t^2 + 2 bh t + c = 0 given disc = bh^2 - a c >= 0, smaller first
+ * (Press et al.: q = -(bh + sign(bh) sqrt(disc)), roots q/a and c/q, no
+ * cancellation between -bh and the square root). */
+CR_FUNC void Quadratic_Roots(real a, real bh, real c, real disc, real* t0, real* t1)
+{
+  real q = -(bh + copysign(sqrt(disc), bh));
+  real r0 = q / a;
+  real r1 = (q != (real)0.0f) ? c / q : r0;
+  *t0 = fmin(r0, r1);
+  *t1 = fmax(r0, r1);
+}
+
+/* Sphere: nearest root in [tmin, tmax]. */
+CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin, real tmax, real* tHit)
+{
+  real f[3];
+  for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
+  real rad = (real)s->radius;
+  real a = Dot3(r->dir, r->dir);
+  real bh = Dot3(f, r->dir);
+  real c = Dot3(f, f) - rad * rad;
+  real t0, t1;
+#ifdef CR_FAST
+  real b = (real)2.0f * bh;
+  real disc4 = b * b - (real)4.0f * a * c;
+  if (disc4 < (real)0.0f) return 0;
+  real sq = sqrt(disc4);
+  t0 = (-b - sq) / ((real)2.0f * a);
+  t1 = (-b + sq) / ((real)2.0f * a);
+#else
+  /* bh^2 - a c = a r^2 - |f x d|^2: the squared distance of the centre from
+   * the ray's line comes from a cross product, exact in the cases where the
+   * textbook form cancels (small far spheres, rays through the centre). */
+  real cx = f[1] * r->dir[2] - f[2] * r->dir[1];
+  real cy = f[2] * r->dir[0] - f[0] * r->dir[2];
+  real cz = f[0] * r->dir[1] - f[1] * r->dir[0];
+  real disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
+  if (disc < (real)0.0f) return 0;
+  Quadratic_Roots(a, bh, c, disc, &t0, &t1);
+#endif
+  if (t0 >= tmin && t0 <= tmax) {
+    *tHit = t0;
+    return 1;
+  }
+  if (t1 >= tmin && t1 <= tmax) {
+    *tHit = t1;
+    return 1;
+  }
+  return 0;
+}
+
+/* Triangle: t and barycentrics (u weights v1, v weights v2). */
+CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real tmin, real tmax, real* tHit,
+                               real* uHit, real* vHit)
+{
+#ifdef CR_FAST
+  /* Moller & Trumbore 1997, fixed epsilon on the determinant. */
+  real e1[3], e2[3], pv[3], tv[3], qv[3];
+  for (int i = 0; i < 3; ++i) {
+    e1[i] = (real)tri->v1[i] - (real)tri->v0[i];
+    e2[i] = (real)tri->v2[i] - (real)tri->v0[i];
+    tv[i] = r->org[i] - (real)tri->v0[i];
+  }
+  pv[0] = r->dir[1] * e2[2] - r->dir[2] * e2[1];
+  pv[1] = r->dir[2] * e2[0] - r->dir[0] * e2[2];
+  pv[2] = r->dir[0] * e2[1] - r->dir[1] * e2[0];
+  real det = Dot3(e1, pv);
+  if (fabs(det) < (real)1e-9f) return 0;
+  real invDet = (real)1.0f / det;
+  real u = Dot3(tv, pv) * invDet;
+  if (u < (real)0.0f || u > (real)1.0f) return 0;
+  qv[0] = tv[1] * e1[2] - tv[2] * e1[1];
+  qv[1] = tv[2] * e1[0] - tv[0] * e1[2];
+  qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
+  real v = Dot3(r->dir, qv) * invDet;
+  if (v < (real)0.0f || u + v > (real)1.0f) return 0;
+  real t = Dot3(e2, qv) * invDet;
+  if (t < tmin || t > tmax) return 0;
+  *tHit = t;
+  *uHit = u;
+  *vHit = v;
+  return 1;
+#else
+  /* Woop, Benthin & Wald 2013: translate to the ray origin, shear so the ray
+   * is the +z axis, evaluate the 2D edge functions. An edge function that is
+   * exactly 0 counts as inside for both neighbours, so no ray leaks through a
+   * shared edge or vertex. */
+  const int kx = r->kx, ky = r->ky, kz = r->kz;
+  real A[3], B[3], C[3];
+  for (int i = 0; i < 3; ++i) {
+    A[i] = (real)tri->v0[i] - r->org[i];
+    B[i] = (real)tri->v1[i] - r->org[i];
+    C[i] = (real)tri->v2[i] - r->org[i];
+  }
+  const real Ax = A[kx] - r->sx * A[kz], Ay = A[ky] - r->sy * A[kz];
+  const real Bx = B[kx] - r->sx * B[kz], By = B[ky] - r->sy * B[kz];
+  const real Cx = C[kx] - r->sx * C[kz], Cy = C[ky] - r->sy * C[kz];
+  const real U = Cx * By - Cy * Bx;
+  const real V = Ax * Cy - Ay * Cx;
+  const real W = Bx * Ay - By * Ax;
+  if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
+    return 0;
+  const real det = U + V + W;
+  if (det == (real)0.0f) return 0;
+  const real Az = r->sz * A[kz], Bz = r->sz * B[kz], Cz = r->sz * C[kz];
+  const real T = U * Az + V * Bz + W * Cz;
+  const real invDet = (real)1.0f / det;
+  const real t = T * invDet;
+  if (!(t >= tmin && t <= tmax)) return 0;
+  *tHit = t;
+  *uHit = V * invDet;
+  *vHit = W * invDet;
+  return 1;
+#endif
+}
+
+/* Open cone or cylinder (NFF `c`): the quadric |radial|^2 = r(s)^2 with
+ * r(s) = r0 + (r1 - r0) s / H, kept for axial s in [0, H]. */
+CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, real tmax, real* tHit)
+{
+  real w[3], dl[3];
+  for (int i = 0; i < 3; ++i) {
+    w[i] = (real)cn->apex[i] - (real)cn->base[i];
+    dl[i] = r->org[i] - (real)cn->base[i];
+  }
+  const real H = sqrt(Dot3(w, w));
+  if (!(H > (real)0.0f)) return 0;
+  for (int i = 0; i < 3; ++i) w[i] = w[i] / H;
+  const real r0 = (real)cn->baseRadius;
+  const real k = ((real)cn->apexRadius - r0) / H;
+  const real ds = Dot3(r->dir, w);
+  const real os = Dot3(dl, w);
+  real dR[3], oR[3];
+  for (int i = 0; i < 3; ++i) {
+    dR[i] = r->dir[i] - ds * w[i];
+    oR[i] = dl[i] - os * w[i];
+  }
+  const real rb = r0 + k * os;
+  const real A = Dot3(dR, dR) - k * k * ds * ds;
+  const real Bh = Dot3(oR, dR) - k * ds * rb;
+  const real C = Dot3(oR, oR) - rb * rb;
+  real t0, t1;
+  if (A == (real)0.0f) {
+    if (Bh == (real)0.0f) return 0;
+    t0 = t1 = -C / ((real)2.0f * Bh);
+  } else {
+#ifdef CR_FAST
+    real disc4 = (real)4.0f * Bh * Bh - (real)4.0f * A * C;
+    if (disc4 < (real)0.0f) return 0;
+    real sq = sqrt(disc4);
+    real ta = (-(real)2.0f * Bh - sq) / ((real)2.0f * A);
+    real tb = (-(real)2.0f * Bh + sq) / ((real)2.0f * A);
+    t0 = fmin(ta, tb);
+    t1 = fmax(ta, tb);
+#else
+    /* Bh^2 - A C = |rb dR - k ds oR|^2 - |oR x dR|^2 (expand both sides):
+     * the same cure as for spheres, no cancellation between two large
+     * squares when the cone is thin and far away. */
+    real e[3], x[3];
+    for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
+    x[0] = oR[1] * dR[2] - oR[2] * dR[1];
+    x[1] = oR[2] * dR[0] - oR[0] * dR[2];
+    x[2] = oR[0] * dR[1] - oR[1] * dR[0];
+    real disc = Dot3(e, e) - Dot3(x, x);
+    if (disc < (real)0.0f) return 0;
+    Quadratic_Roots(A, Bh, C, disc, &t0, &t1);
+#endif
+  }
+  if (t0 >= tmin && t0 <= tmax) {
+    real s = os + t0 * ds;
+    if (s >= (real)0.0f && s <= H) {
+      *tHit = t0;
+      return 1;
+    }
+  }
+  if (t1 >= tmin && t1 <= tmax) {
+    real s = os + t1 * ds;
+    if (s >= (real)0.0f && s <= H) {
+      *tHit = t1;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/* Tests primitive g and keeps the hit if it is closer (Hit_Closer). Returns 1
+ * when the hit changed. */
+CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
+{
+  real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
+  int found = 0;
+#if CR_HAS_SPHERES
+  if (g < pv->nSpheres) {
+    found = Sphere_Intersect(r, pv->spheres + g, r->tmin, hit->t, &t);
+  } else
+#endif
+#if CR_HAS_TRIANGLES
+      if (g < pv->nSpheres + pv->nTriangles) {
+    CR_GLOBAL const Triangle* tri = pv->triangles + (g - pv->nSpheres);
+    found = Triangle_Intersect(r, tri, r->tmin, hit->t, &t, &u, &v);
+    if (!(tri->flags & CR_TRI_REPORT_UV)) u = v = (real)0.0f;
+  } else
+#endif
+  {
+#if CR_HAS_CONES
+    found = Cone_Intersect(r, pv->cones + (g - pv->nSpheres - pv->nTriangles), r->tmin, hit->t, &t);
+#endif
+  }
+  if (found && Hit_Closer(t, g, hit)) {
+    hit->t = t;
+    hit->u = u;
+    hit->v = v;
+    hit->g = g;
+    return 1;
+  }
+  return 0;
+}
+
+/* Conservative slab test of a box against [tmin, tmax] (Williams et al. 2005
+ * with Ize 2013's rounding: the far distance is scaled by 1 + 2 gamma(3) so
+ * that rounding can never cull a box the exact ray enters). 0 * inf = NaN on
+ * a plane-parallel ray is dropped by fmin/fmax. Writes the entry distance. */
+CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bmax, const Ray* r, real tmin, real tmax,
+                          real* tEnter)
+{
+  real tn = tmin, tf = tmax;
+  real boxFar = (real)CR_INF;
+  real boxNear = -(real)CR_INF;
+  for (int a = 0; a < 3; ++a) {
+    real lo = ((real)bmin[a] - r->org[a]) * r->inv[a];
+    real hi = ((real)bmax[a] - r->org[a]) * r->inv[a];
+    real n = r->inv[a] < (real)0.0f ? hi : lo;
+    real f = r->inv[a] < (real)0.0f ? lo : hi;
+    boxNear = fmax(boxNear, n);
+    boxFar = fmin(boxFar, f);
+  }
+#ifndef CR_FAST
+#ifdef CR_FP64
+  boxFar = boxFar * (real)1.0000000000000007;
+#else
+  boxFar = boxFar * 1.0000004f;
+#endif
+#endif
+  tn = fmax(tn, boxNear);
+  tf = fmin(tf, boxFar);
+  *tEnter = tn;
+  return tn <= tf;
+}
+
+/* The .hits record of a finished query: closest hit (t, prim id, u, v) or
+ * occlusion (t = 0, an occluder's id); a miss is (+inf, CR_NO_HIT). */
+CR_FUNC HitRecord Hit_ToRecord(const Hit* h, CR_GLOBAL const uint* primIds, int anyHit)
+{
+  HitRecord r;
+  r.u = 0.0f;
+  r.v = 0.0f;
+  if (h->g == CR_NO_HIT) {
+    r.t = CR_INF;
+    r.prim = CR_NO_HIT;
+    return r;
+  }
+  r.prim = primIds[h->g];
+  r.t = anyHit ? 0.0f : (float)h->t;
+  if (!anyHit) {
+    r.u = (float)h->u;
+    r.v = (float)h->v;
+  }
+  return r;
+}
+
+#endif /* CELLRAY_KERNELS_INTERSECT_H */

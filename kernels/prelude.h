@@ -1,0 +1,75 @@
+/* cellray kernel prelude: the few things that differ between OpenCL C 1.2 and
+ * C++20, so that every file in kernels/ compiles as both. The C++ build of the
+ * kernels is the `scalar` backend and the test oracle for the OpenCL build.
+ *
+ * Rules for code in kernels/ (the portable subset):
+ *  - no vector types (float3 is 16 bytes in OpenCL, 12 in C++): use float[3];
+ *  - no unsuffixed floating literals (they are double in both languages and
+ *    would need cl_khr_fp64): write 0.5f, or CR_R(0.5) for the `real` type;
+ *  - functions are CR_FUNC, pointers into buffers are CR_GLOBAL;
+ *  - no recursion, no function pointers, no dynamic allocation.
+ */
+#ifndef CELLRAY_KERNELS_PRELUDE_H
+#define CELLRAY_KERNELS_PRELUDE_H
+
+#if defined(__OPENCL_C_VERSION__) || defined(__OPENCL_VERSION__)
+#define CR_OPENCL 1
+#define CR_FUNC static inline
+#define CR_GLOBAL __global
+#define CR_LOCAL __local
+#define CR_NS_BEGIN
+#define CR_NS_END
+#pragma OPENCL FP_CONTRACT OFF
+#ifdef CR_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+typedef ulong cr_u64;
+#define CR_ASSERT(x)
+#define CR_FLT_MAX FLT_MAX
+#define CR_INF INFINITY
+CR_FUNC uint cr_popcount(uint x) { return popcount(x); }
+CR_FUNC uint cr_float_bits(float x) { return as_uint(x); }
+CR_FUNC float cr_bits_float(uint x) { return as_float(x); }
+#define cr_isnan(x) isnan(x)
+
+#else /* C++ */
+#include <bit>
+#include <cassert>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#define CR_FUNC inline
+#define CR_GLOBAL
+#define CR_LOCAL
+#define CR_NS_BEGIN namespace cr {
+#define CR_NS_END }
+#define CR_ASSERT(x) assert(x)
+#define CR_FLT_MAX FLT_MAX
+#define CR_INF INFINITY
+namespace cr {
+typedef std::uint32_t uint;
+typedef std::uint64_t cr_u64;
+using std::copysign;
+using std::fabs;
+using std::floor;
+using std::fmax;
+using std::fmin;
+using std::sqrt;
+inline uint cr_popcount(uint x) { return static_cast<uint>(std::popcount(x)); }
+inline uint cr_float_bits(float x) { return std::bit_cast<uint>(x); }
+inline float cr_bits_float(uint x) { return std::bit_cast<float>(x); }
+inline int cr_isnan(float x) { return std::isnan(x) ? 1 : 0; }
+inline int cr_isnan(double x) { return std::isnan(x) ? 1 : 0; }
+inline int cr_min(int a, int b) { return a < b ? a : b; }
+inline int cr_max(int a, int b) { return a > b ? a : b; }
+inline uint cr_minu(uint a, uint b) { return a < b ? a : b; }
+}  // namespace cr
+#endif
+
+#ifdef CR_OPENCL
+#define cr_min(a, b) min((int)(a), (int)(b))
+#define cr_max(a, b) max((int)(a), (int)(b))
+#define cr_minu(a, b) min((uint)(a), (uint)(b))
+#endif
+
+#endif /* CELLRAY_KERNELS_PRELUDE_H */

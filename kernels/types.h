@@ -1,0 +1,139 @@
+/* Shared data layouts: read by the OpenCL compiler and by C++ (host builders,
+ * scalar and SIMD backends). Every struct states its byte size; C++ asserts
+ * size and offsets, so host and device cannot drift apart.
+ *
+ * Unified primitive index g: the device stores one array per primitive type and
+ * numbers them back to back: spheres [0, nSpheres), triangles [nSpheres,
+ * nSpheres + nTriangles), cones after that. References in leaves and cells are
+ * such indices, sorted ascending inside each leaf or cell, so they come grouped
+ * by type. primIds[g] is the scene-file primitive id of ../shared/FORMATS.md.
+ */
+#ifndef CELLRAY_KERNELS_TYPES_H
+#define CELLRAY_KERNELS_TYPES_H
+
+#include "prelude.h"
+
+CR_NS_BEGIN
+
+#define CR_NO_HIT 0xFFFFFFFFu
+#define CR_TRI_REPORT_UV 1u   /* Triangle.flags: the piece is a whole triangle statement */
+
+/* One record of a .rays file, and the layout rays are uploaded in. 32 bytes. */
+typedef struct {
+  float org[3];
+  float tmin;
+  float dir[3];
+  float tmax;
+} RayRecord;
+
+/* One record of a .hits file, and the layout hits are downloaded in. 16 bytes. */
+typedef struct {
+  float t;
+  uint prim;
+  float u;
+  float v;
+} HitRecord;
+
+/* Sphere: 16 bytes. */
+typedef struct {
+  float center[3];
+  float radius;
+} Sphere;
+
+/* Triangle (also every piece of a split polygon or patch): 48 bytes; the pads
+ * keep each vertex 16-byte aligned for vector loads. */
+typedef struct {
+  float v0[3];
+  uint flags; /* CR_TRI_REPORT_UV */
+  float v1[3];
+  uint pad1;
+  float v2[3];
+  uint pad2;
+} Triangle;
+
+/* Open truncated cone or cylinder between two planes normal to its axis
+ * (NFF `c`): 32 bytes. Radii are >= 0 here; which side is visible belongs to
+ * the scene's materials. */
+typedef struct {
+  float base[3];
+  float baseRadius;
+  float apex[3];
+  float apexRadius;
+} Cone;
+
+/* Counts that turn a unified index into (type, index). 16 bytes. */
+typedef struct {
+  uint nSpheres;
+  uint nTriangles;
+  uint nCones;
+  uint pad;
+} PrimCounts;
+
+/* BVH node, 32 bytes (pbrt's LinearBVHNode shape). count == 0: interior node
+ * whose children are nodes `first` and `first + 1`; count > 0: leaf holding
+ * references [first, first + count). Node 0 is the root. */
+typedef struct {
+  float bmin[3];
+  uint first;
+  float bmax[3];
+  uint count;
+} BVHNode;
+
+/* Uniform grid header, 64 bytes. Cell (x, y, z) has index
+ * x + res[0] * (y + res[1] * z); its references are
+ * refs[cellStart[i] .. cellStart[i + 1]) (compressed row layout, nCells + 1
+ * offsets). Cell planes are bmin + i * cellSize, computed only by
+ * Grid_Plane() so builder and traversal agree to the bit. */
+typedef struct {
+  float bmin[3];
+  uint nCells;
+  float bmax[3];
+  uint nRefs;
+  float cellSize[3];
+  uint pad0;
+  uint res[3];
+  uint pad1;
+} GridHeader;
+
+/* Octree node, 16 bytes. childMask != 0: interior node; its non-empty children
+ * are stored in octant order starting at `first`, child of octant o at
+ * first + popcount(childMask & ((1 << o) - 1)); octant bit 0 is +x, 1 is +y,
+ * 2 is +z. childMask == 0: leaf with references [first, first + count).
+ * `depth` is informative (the level of the node, root 0). */
+typedef struct {
+  uint first;
+  uint count;
+  uint childMask;
+  uint depth;
+} OctreeNode;
+
+/* Octree header, 32 bytes: a cube [rootMin, rootMin + rootSize]^3. Planes are
+ * rootMin + i * (rootSize * 2^-level), computed only by Octree_Plane(). */
+typedef struct {
+  float rootMin[3];
+  float rootSize;
+  uint nNodes;
+  uint nRefs;
+  uint maxDepth;
+  uint pad;
+} OctreeHeader;
+
+CR_NS_END
+
+#ifdef __cplusplus
+#include <cstddef>
+namespace cr {
+static_assert(sizeof(RayRecord) == 32 && offsetof(RayRecord, tmin) == 12 && offsetof(RayRecord, tmax) == 28);
+static_assert(sizeof(HitRecord) == 16 && offsetof(HitRecord, prim) == 4 && offsetof(HitRecord, v) == 12);
+static_assert(sizeof(Sphere) == 16);
+static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
+static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
+static_assert(sizeof(PrimCounts) == 16);
+static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);
+static_assert(sizeof(GridHeader) == 64 && offsetof(GridHeader, res) == 48);
+static_assert(sizeof(OctreeNode) == 16);
+static_assert(sizeof(OctreeHeader) == 32);
+}  // namespace cr
+#endif
+
+#endif /* CELLRAY_KERNELS_TYPES_H */
