@@ -1,0 +1,81 @@
+// Shared helpers for the test suite: scene paths, cached scenes, ray sets, and
+// the conformance check of any tracer against the fp64 reference.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <doctest/doctest.h>
+
+#include "io/rays_io.h"
+#include "rays/raygen.h"
+#include "reference/check.h"
+#include "reference/reference.h"
+#include "scene/scene.h"
+#include "trace/tracer.h"
+
+namespace cr::test {
+
+// The 11 SPD scenes shipped in scenes/spd/.
+inline const std::vector<std::string>& SpdScenes()
+{
+  static const std::vector<std::string> names = {"balls", "gears",  "jacks",    "lattice", "mount", "rings",
+                                                  "shells", "sombrero", "teapot", "tetra",   "tree"};
+  return names;
+}
+
+inline std::string SourcePath(const std::string& rel) { return std::string(CELLRAY_SOURCE_DIR) + "/" + rel; }
+inline std::string SpdPath(const std::string& name) { return SourcePath("scenes/spd/" + name + ".nff"); }
+
+// Loads each scene once per test process.
+inline const Scene& CachedScene(const std::string& path)
+{
+  static std::mutex mutex;
+  static std::map<std::string, std::unique_ptr<Scene>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[path];
+  if (!slot) slot = std::make_unique<Scene>(LoadScene(path));
+  return *slot;
+}
+
+inline const ref::ReferenceTracer& CachedReference(const Scene& scene)
+{
+  static std::mutex mutex;
+  static std::map<const Scene*, std::unique_ptr<ref::ReferenceTracer>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& slot = cache[&scene];
+  if (!slot) slot = std::make_unique<ref::ReferenceTracer>(scene);
+  return *slot;
+}
+
+// A ray set of the given kind with about size * size rays.
+inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int size, std::uint64_t seed = 7)
+{
+  RayGenOptions g;
+  g.kind = kind;
+  g.width = size;
+  g.height = size;
+  g.seed = seed;
+  g.count = std::uint64_t(size) * std::uint64_t(size);
+  return GenerateRays(scene, CachedReference(scene), g);
+}
+
+inline bool IsOcclusion(RayKind kind) { return kind == RayKind::Shadow; }
+
+// Traces `rays` with `config` and checks every answer against the reference.
+inline ref::CheckResult CheckTracer(const Scene& scene, const TraceConfig& config, const std::vector<RayRecord>& rays,
+                                    bool occlusion, std::vector<HitRecord>* hitsOut = nullptr)
+{
+  auto tracer = CreateTracer(scene, config);
+  std::vector<HitRecord> hits;
+  tracer->Trace(rays, hits, occlusion, nullptr);
+  REQUIRE(hits.size() == rays.size());
+  ref::CheckResult r = ref::CheckHits(CachedReference(scene), rays, hits, occlusion);
+  if (hitsOut) *hitsOut = std::move(hits);
+  return r;
+}
+
+}  // namespace cr::test
