@@ -232,9 +232,7 @@ CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
 #endif
 #if CR_HAS_TRIANGLES
       if (g < pv->nSpheres + pv->nTriangles) {
-    CR_GLOBAL const Triangle* tri = pv->triangles + (g - pv->nSpheres);
-    found = Triangle_Intersect(r, tri, r->tmin, hit->t, &t, &u, &v);
-    if (!(tri->flags & CR_TRI_REPORT_UV)) u = v = (real)0.0f;
+    found = Triangle_Intersect(r, pv->triangles + (g - pv->nSpheres), r->tmin, hit->t, &t, &u, &v);
   } else
 #endif
   {
@@ -284,8 +282,12 @@ CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bm
 }
 
 /* The .hits record of a finished query: closest hit (t, prim id, u, v) or
- * occlusion (t = 0, an occluder's id); a miss is (+inf, CR_NO_HIT). */
-CR_FUNC HitRecord Hit_ToRecord(const Hit* h, CR_GLOBAL const uint* primIds, int anyHit)
+ * occlusion (t = 0, an occluder's id); a miss is (+inf, CR_NO_HIT). u, v are
+ * reported for whole triangle statements only (FORMATS.md).
+ * With `unified` set, the record is the renderer's internal form instead: prim
+ * holds the unified piece index g and u, v are the barycentrics of every
+ * triangle piece (primIds is not read). */
+CR_FUNC HitRecord Hit_ToRecord(const Hit* h, const PrimView* pv, CR_GLOBAL const uint* primIds, int anyHit, int unified)
 {
   HitRecord r;
   r.u = 0.0f;
@@ -295,9 +297,10 @@ CR_FUNC HitRecord Hit_ToRecord(const Hit* h, CR_GLOBAL const uint* primIds, int 
     r.prim = CR_NO_HIT;
     return r;
   }
-  r.prim = primIds[h->g];
+  r.prim = unified ? h->g : primIds[h->g];
   r.t = anyHit ? 0.0f : (float)h->t;
-  if (!anyHit) {
+  if (!anyHit && h->g >= pv->nSpheres && h->g < pv->nSpheres + pv->nTriangles &&
+      (unified || (pv->triangles[h->g - pv->nSpheres].flags & CR_TRI_REPORT_UV))) {
     r.u = (float)h->u;
     r.v = (float)h->v;
   }

@@ -243,3 +243,20 @@ HitRecord ReferenceTracer::ToRecord(const RefHit& h, bool occlusion) const
 }
 
 }  // namespace cr::ref
+
+namespace cr::ref {
+
+HitRecord ReferenceTracer::ToUnifiedRecord(const RefHit& h, bool occlusion) const
+{
+  HitRecord r{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+  if (!h.Found()) return r;
+  r.prim = h.g;
+  r.t = occlusion ? 0.0f : static_cast<float>(h.t);
+  if (!occlusion && h.g >= counts_.nSpheres && h.g < counts_.nSpheres + counts_.nTriangles) {
+    r.u = static_cast<float>(h.u);
+    r.v = static_cast<float>(h.v);
+  }
+  return r;
+}
+
+}  // namespace cr::ref

@@ -49,6 +49,8 @@ class ReferenceTracer {
   // The record a tracer reports for this hit (prim id; u, v only for whole
   // triangle statements); occlusion records have t = 0.
   HitRecord ToRecord(const RefHit& h, bool occlusion) const;
+  // The renderer's internal form (TraceConfig::unifiedHits): prim = g.
+  HitRecord ToUnifiedRecord(const RefHit& h, bool occlusion) const;
 
   const Scene& GetScene() const { return scene_; }
   std::size_t NodeCount() const { return nodes_.size(); }

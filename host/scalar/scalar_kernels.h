@@ -22,6 +22,7 @@ struct KernelArgs {
   const std::uint32_t* primIds = nullptr;  // by unified index
   const RayRecord* rays = nullptr;
   HitRecord* hits = nullptr;
+  bool unifiedHits = false;  // TraceConfig::unifiedHits
 };
 
 #define CR_DECLARE_KERNEL_NS(ns)                                                                              \

@@ -47,6 +47,7 @@ class ScalarTracer final : public Tracer {
     a.primIds = primIds_.data();
     a.rays = rays.data();
     a.hits = hits.data();
+    a.unifiedHits = config_.unifiedHits;
     tbb::enumerable_thread_specific<TraceStatsSum> local;
     const bool wantStats = config_.stats && stats;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {

@@ -54,7 +54,7 @@ namespace {
 // The fp64 reference as a backend (its own BVH; the accel choice is ignored).
 class ReferenceBackend final : public Tracer {
  public:
-  explicit ReferenceBackend(const Scene& scene)
+  ReferenceBackend(const Scene& scene, bool unifiedHits) : unifiedHits_(unifiedHits)
   {
     auto t0 = std::chrono::steady_clock::now();
     tracer_ = std::make_unique<ref::ReferenceTracer>(scene);
@@ -68,7 +68,8 @@ class ReferenceBackend final : public Tracer {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         ref::DRay ray = ref::MakeRay(rays[i]);
-        hits[i] = tracer_->ToRecord(occlusion ? tracer_->IntersectP(ray) : tracer_->Intersect(ray), occlusion);
+        ref::RefHit h = occlusion ? tracer_->IntersectP(ray) : tracer_->Intersect(ray);
+        hits[i] = unifiedHits_ ? tracer_->ToUnifiedRecord(h, occlusion) : tracer_->ToRecord(h, occlusion);
       }
     });
   }
@@ -76,6 +77,7 @@ class ReferenceBackend final : public Tracer {
 
  private:
   std::unique_ptr<ref::ReferenceTracer> tracer_;
+  bool unifiedHits_ = false;
 };
 
 }  // namespace
@@ -87,7 +89,7 @@ std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig
 std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
 {
   switch (config.backend) {
-    case Backend::Reference: return std::make_unique<ReferenceBackend>(scene);
+    case Backend::Reference: return std::make_unique<ReferenceBackend>(scene, config.unifiedHits);
     case Backend::Scalar: return CreateScalarTracer(scene, config);
     case Backend::Simd: return CreateSimdTracer(scene, config);
     case Backend::OpenCL: return CreateOpenCLTracer(scene, config);

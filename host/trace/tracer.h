@@ -32,6 +32,9 @@ struct TraceConfig {
   std::string isa;          // simd: avx2 | sse4 | scalar, empty: best available
   std::string device;       // opencl: "N" or "platform:device", empty: default
   std::string variant;      // traversal variant (e.g. ray | packet), empty: default
+  // Internal hit form for the renderer: HitRecord.prim is the unified piece
+  // index g (kernels/types.h) and u, v are reported for every triangle piece.
+  bool unifiedHits = false;
 };
 
 // Sums of the per-ray measures over a batch.
