@@ -108,6 +108,12 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
   const int h = opt.height > 0 ? opt.height : scene.camera.height;
   const CameraFrame frame = MakeCameraFrame(scene.camera, w, h);
   const std::uint64_t target = opt.count ? opt.count : std::uint64_t(w) * std::uint64_t(h);
+  // 2^27 rays are 4 GiB of records: beyond that, ask for smaller sets.
+  constexpr std::uint64_t kMaxRays = std::uint64_t(1) << 27;
+  const std::uint64_t primaries = std::uint64_t(opt.spdCorners ? w + 1 : w) * std::uint64_t(opt.spdCorners ? h + 1 : h);
+  if (target > kMaxRays || primaries > kMaxRays)
+    throw InputError(fmt::format("{} x {} image / {} rays: more than {} rays per set; use a smaller --size or --count",
+                                 w, h, target, kMaxRays));
   std::vector<RayRecord> rays;
 
   if (opt.kind == RayKind::Primary) {

@@ -32,6 +32,7 @@ class Lexer {
     if (pos_ >= text_.size()) return std::nullopt;
     std::size_t b = pos_;
     while (pos_ < text_.size() && !IsSpace(text_[pos_]) && text_[pos_] != '#') ++pos_;
+    lastTokenLine_ = line_;
     return Token{text_.substr(b, pos_ - b), line_};
   }
   // True when another token follows on the current line.
@@ -41,6 +42,8 @@ class Lexer {
     return pos_ < text_.size() && text_[pos_] != '\n' && text_[pos_] != '#';
   }
   long Line() const { return line_; }
+  // Line of the last token read: where an unexpected end of file is reported.
+  long EofLine() const { return lastTokenLine_; }
   const std::string& Name() const { return name_; }
 
   [[noreturn]] void Fail(long line, const std::string& what) const { throw InputError(name_, line, what); }
@@ -50,7 +53,7 @@ class Lexer {
   {
     auto tok = Next();
     if (!tok)
-      Fail(Line(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
+      Fail(EofLine(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
                                stmtLine, what));
     return ParseNumber(*tok, stmt, what);
   }
@@ -75,7 +78,7 @@ class Lexer {
   {
     auto tok = Next();
     if (!tok)
-      Fail(Line(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
+      Fail(EofLine(), fmt::format("truncated '{}' statement (started on line {}): end of file where {} was expected", stmt,
                                stmtLine, what));
     long v = 0;
     auto [ptr, ec] = std::from_chars(tok->text.data(), tok->text.data() + tok->text.size(), v);
@@ -88,7 +91,7 @@ class Lexer {
   {
     auto tok = Next();
     if (!tok)
-      Fail(Line(), fmt::format("truncated 'v' block (started on line {}): end of file where '{}' was expected", stmtLine,
+      Fail(EofLine(), fmt::format("truncated 'v' block (started on line {}): end of file where '{}' was expected", stmtLine,
                                expected));
     if (tok->text != expected)
       Fail(tok->line, fmt::format("'v' block: expected '{}', got '{}'", expected, tok->text));
@@ -117,6 +120,7 @@ class Lexer {
   std::string name_;
   std::size_t pos_ = 0;
   long line_ = 1;
+  long lastTokenLine_ = 1;
 };
 
 glm::dvec3 Vec(Lexer& lx, const char* stmt, long line, const char* what)

@@ -1,0 +1,220 @@
+// Scene loading: SPD primitive counts, NFF statements, triangulation.
+#include <cmath>
+
+#include "core/error.h"
+#include "core/file_util.h"
+#include "scene/triangulate.h"
+#include "test_util.h"
+
+using namespace cr;
+
+namespace {
+
+struct SpdCounts {
+  const char* name;
+  std::uint32_t spheres, cones, polygons, patches, lights;
+};
+
+// Statement counts of the SPD scenes at their default size (../shared/SPD.md).
+const SpdCounts kSpd[] = {
+    {"balls", 7381, 0, 1, 0, 3},    {"gears", 0, 0, 9345, 0, 5},   {"jacks", 6, 3, 0, 0, 1},
+    {"lattice", 2197, 6084, 0, 0, 6}, {"mount", 4, 0, 8192, 0, 1}, {"rings", 4200, 4200, 1, 0, 3},
+    {"shells", 5761, 0, 0, 0, 1},   {"sombrero", 0, 0, 1922, 0, 1}, {"teapot", 0, 0, 36, 2256, 2},
+    {"tetra", 0, 0, 4096, 0, 1},    {"tree", 4095, 4095, 1, 0, 7},
+};
+
+double PolygonArea(const Scene& s, std::uint32_t id)
+{
+  const PrimInfo& p = s.prims[id];
+  double a = 0.0;
+  for (std::uint32_t i = 0; i < p.nPieces; ++i) {
+    const Triangle& t = s.triangles[p.firstPiece + i];
+    glm::dvec3 v0(t.v0[0], t.v0[1], t.v0[2]), v1(t.v1[0], t.v1[1], t.v1[2]), v2(t.v2[0], t.v2[1], t.v2[2]);
+    a += 0.5 * glm::length(glm::cross(v1 - v0, v2 - v0));
+  }
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("SPD scenes load with the published primitive counts")
+{
+  for (const SpdCounts& c : kSpd) {
+    const Scene& s = test::CachedScene(test::SpdPath(c.name));
+    INFO(c.name);
+    CHECK(s.CountKind(PrimKind::kSphere) == c.spheres);
+    CHECK(s.CountKind(PrimKind::kCone) == c.cones);
+    CHECK(s.CountKind(PrimKind::kPolygon) == c.polygons);
+    CHECK(s.CountKind(PrimKind::kPatch) == c.patches);
+    CHECK(s.lights.size() == c.lights);
+    CHECK(s.NumPrims() == c.spheres + c.cones + c.polygons + c.patches);
+    // No SPD primitive is degenerate: every statement has geometry.
+    CHECK(s.spheres.size() == c.spheres);
+    CHECK(s.cones.size() == c.cones);
+    CHECK(s.hasCamera);
+    // Ids are statement positions: unified index -> id is a bijection onto
+    // the geometric statements.
+    std::vector<int> seen(s.NumPrims(), 0);
+    for (std::uint32_t id : s.UnifiedIds()) seen.at(id) = 1;
+    CHECK(std::count(seen.begin(), seen.end(), 1) == int(s.NumPrims()));
+  }
+}
+
+TEST_CASE("gears: the non-convex 144-vertex faces triangulate without losing or adding area")
+{
+  const Scene& s = test::CachedScene(test::SpdPath("gears"));
+  int big = 0;
+  for (const PrimInfo& p : s.prims) {
+    if (p.nPieces < 100) continue;
+    ++big;
+    CHECK(p.nPieces == 142);  // a simple 144-gon splits into n - 2 triangles
+  }
+  CHECK(big > 0);
+
+  // The first 144-vertex face of the file, alone: its pieces cover exactly
+  // the polygon's (Newell) area.
+  std::vector<char> data = ReadFile(test::SpdPath("gears"));
+  std::string_view text(data.data(), data.size());
+  std::size_t at = text.find("\np 144\n");
+  REQUIRE(at != std::string_view::npos);
+  std::size_t end = at + 1;
+  for (int line = 0; line < 145; ++line) end = text.find('\n', end) + 1;
+  std::string face(text.substr(at + 1, end - at - 1));
+  Scene one;
+  ParseNFF(face, "gears-face", one);
+  REQUIRE(one.NumPrims() == 1);
+  std::vector<glm::dvec3> verts;
+  std::size_t p = face.find('\n') + 1;
+  double x, y, z;
+  while (p < face.size() && std::sscanf(face.c_str() + p, "%lf %lf %lf", &x, &y, &z) == 3) {
+    verts.emplace_back(float(x), float(y), float(z));
+    p = face.find('\n', p) + 1;
+  }
+  REQUIRE(verts.size() == 144);
+  Triangulation tri = TriangulatePolygon(verts);
+  CHECK_FALSE(tri.nonSimple);
+  CHECK(PolygonArea(one, 0) == doctest::Approx(tri.area).epsilon(1e-6));
+}
+
+TEST_CASE("triangulation: convex, non-convex, collinear and repeated vertices")
+{
+  using V = glm::dvec3;
+  SUBCASE("triangle keeps its order")
+  {
+    auto t = TriangulatePolygon({V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)});
+    REQUIRE(t.triangles.size() == 1);
+    CHECK(t.triangles[0] == std::array<std::uint32_t, 3>{0, 1, 2});
+  }
+  SUBCASE("L shape (non-convex) splits into 4 triangles of total area 3")
+  {
+    std::vector<V> l = {V(0, 0, 0), V(2, 0, 0), V(2, 1, 0), V(1, 1, 0), V(1, 2, 0), V(0, 2, 0)};
+    auto t = TriangulatePolygon(l);
+    CHECK(t.triangles.size() == 4);
+    CHECK_FALSE(t.nonSimple);
+    double a = 0;
+    for (auto& tr : t.triangles) a += 0.5 * glm::length(glm::cross(l[tr[1]] - l[tr[0]], l[tr[2]] - l[tr[0]]));
+    CHECK(a == doctest::Approx(3.0));
+    CHECK(t.area == doctest::Approx(3.0));
+  }
+  SUBCASE("clockwise polygon in a tilted plane")
+  {
+    std::vector<V> q = {V(0, 0, 0), V(0, 1, 1), V(1, 1, 1), V(1, 0, 0)};
+    auto t = TriangulatePolygon(q);
+    CHECK(t.triangles.size() == 2);
+    CHECK(t.area == doctest::Approx(std::sqrt(2.0)));
+  }
+  SUBCASE("collinear and repeated vertices are dropped")
+  {
+    std::vector<V> q = {V(0, 0, 0), V(1, 0, 0), V(1, 0, 0), V(2, 0, 0), V(2, 2, 0), V(0, 2, 0), V(0, 0, 0)};
+    auto t = TriangulatePolygon(q);
+    CHECK_FALSE(t.degenerate);
+    CHECK(t.triangles.size() <= 3);
+    double a = 0;
+    for (auto& tr : t.triangles) {
+      double ta = 0.5 * glm::length(glm::cross(q[tr[1]] - q[tr[0]], q[tr[2]] - q[tr[0]]));
+      CHECK(ta > 0.0);  // no zero-area sliver from the collinear vertex
+      a += ta;
+    }
+    CHECK(a == doctest::Approx(4.0));
+  }
+  SUBCASE("zero area and too few vertices are degenerate")
+  {
+    CHECK(TriangulatePolygon({V(0, 0, 0), V(1, 1, 1), V(2, 2, 2)}).degenerate);
+    CHECK(TriangulatePolygon({V(0, 0, 0), V(1, 1, 1)}).degenerate);
+    CHECK(TriangulatePolygon({V(0, 0, 0), V(0, 0, 0), V(0, 0, 0), V(0, 0, 0)}).degenerate);
+  }
+}
+
+TEST_CASE("NFF statements: lights with colour, cones, negative radii, patches, ids")
+{
+  const char* text =
+      "b 0.1 0.2 0.3\n"
+      "v\nfrom 0 -5 0\nat 0 0 0\nup 0 0 1\nangle 40\nhither 0.5\nresolution 64 32\n"
+      "l 1 2 3\n"
+      "l 4 5 6 0.5 0.25 1\n"
+      "# a comment line\n"
+      "f 1 0 0 0.8 0.2 10 0 1 # trailing comment\n"
+      "s 0 0 0 -1\n"
+      "c 0 0 0 0.5\n  0 0 2 0.25\n"
+      "p 2\n0 0 0\n1 0 0\n"
+      "pp 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n"
+      "s 1 1 1 0\n"
+      "p 4\n0 0 5\n1 0 5\n1 1 5\n0 1 5\n";
+  Scene s;
+  SetWarningsQuiet(true);
+  long before = WarningCount();
+  ParseNFF(text, "snippet", s);
+  long warned = WarningCount() - before;
+  SetWarningsQuiet(false);
+  CHECK(warned == 2);  // the 2-vertex polygon and the zero-radius sphere
+  CHECK(s.background == glm::vec3(0.1f, 0.2f, 0.3f));
+  CHECK(s.camera.width == 64);
+  CHECK(s.camera.height == 32);
+  CHECK(s.camera.hither == 0.5f);
+  REQUIRE(s.lights.size() == 2);
+  CHECK(s.lights[0].color == glm::vec3(1.0f));
+  CHECK(s.lights[1].color == glm::vec3(0.5f, 0.25f, 1.0f));
+  REQUIRE(s.NumPrims() == 6);
+  CHECK(s.prims[0].kind == PrimKind::kSphere);
+  CHECK(s.prims[0].insideVisible);
+  CHECK(s.spheres[0].radius == 1.0f);
+  CHECK(s.prims[1].kind == PrimKind::kCone);
+  CHECK(s.cones[0].apexRadius == 0.25f);
+  CHECK(s.prims[2].nPieces == 0);  // degenerate polygon keeps id 2
+  CHECK(s.prims[3].kind == PrimKind::kPatch);
+  CHECK(s.prims[4].nPieces == 0);  // zero-radius sphere keeps id 4
+  CHECK(s.prims[5].nPieces == 2);
+  CHECK(s.triangleIds == std::vector<std::uint32_t>{3, 5, 5});
+  CHECK(s.sphereIds == std::vector<std::uint32_t>{0});
+  CHECK(s.coneIds == std::vector<std::uint32_t>{1});
+  REQUIRE(s.HasPatchNormals());
+  CHECK(s.triNormals[0][0] == glm::vec3(0, 0, 1));
+  CHECK(s.triangles[0].flags == CR_TRI_REPORT_UV);
+  CHECK(s.triangles[1].flags == 0u);
+  CHECK(s.materials.size() == 2);
+  CHECK(s.prims[0].material == 1);
+}
+
+TEST_CASE("SPD camera: tetra corner rays hit 49,788 times (+-0.5%), every balls corner ray hits")
+{
+  for (const char* name : {"tetra", "balls"}) {
+    const Scene& s = test::CachedScene(test::SpdPath(name));
+    RayGenOptions g;
+    g.spdCorners = true;
+    auto rays = GenerateRays(s, test::CachedReference(s), g);
+    REQUIRE(rays.size() == 263169u);
+    TraceConfig cfg;
+    cfg.backend = Backend::Reference;
+    auto tracer = CreateTracer(s, cfg);
+    std::vector<HitRecord> hits;
+    tracer->Trace(rays, hits, false, nullptr);
+    std::size_t n = std::count_if(hits.begin(), hits.end(), [](const HitRecord& h) { return h.prim != CR_NO_HIT; });
+    INFO(name, ": ", n, " hits");
+    if (std::string(name) == "tetra") {
+      CHECK(double(n) >= 49788 * 0.995);
+      CHECK(double(n) <= 49788 * 1.005);
+    } else {
+      CHECK(n == rays.size());
+    }
+  }
+}
