@@ -172,7 +172,7 @@ Run RegisterCheck(CLI::App& app)
                      {"wrong_not_on_prim", r.wrongNotOnPrim},
                      {"max_rel_t_err", r.maxRelTErr},
                      {"mean_rel_t_err", r.meanRelTErr},
-                     {"tolerance", fmt::format("delta = 2^-16 * (|o|inf + t |d|inf)")},
+                     {"tolerance", "delta = 2^-16 (|o|inf + t |d|inf) + 2^-19 S_prim"},
                      {"first_wrong", r.firstWrong},
                      {"first_wrong_why", r.firstWrongWhy}};
     std::cout << j.dump() << std::endl;

@@ -14,10 +14,12 @@ namespace {
 
 double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
 
-double Delta(const DRay& r, double t)
+// The tolerance of check.h: the ray's magnitudes up to t, plus the scale of
+// the primitive involved (its own coordinates enter the float computation).
+double Delta(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, double t)
 {
   double tt = std::isfinite(t) ? std::max(t, 0.0) : 0.0;
-  return kCheckRelTol * (MaxAbs(r.o) + tt * MaxAbs(r.d));
+  return kCheckRelTol * (MaxAbs(r.o) + tt * MaxAbs(r.d)) + kCheckPrimTol * tr.PrimScale(prim);
 }
 
 // Does the ray meet primitive `prim` (any piece) in [tmin, tmax]?
@@ -92,12 +94,13 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
       if (MeetsPrim(tr, hit.prim, r, pieces)) return Verdict::Agree;
       // Scale delta by where the primitive is along the ray.
       double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
-      return PossiblyMeets(tr, hit.prim, r, Delta(r, far)) ? Verdict::Tie : Verdict::WrongNotOnPrim;
+      return PossiblyMeets(tr, hit.prim, r, Delta(tr, hit.prim, r, far)) ? Verdict::Tie : Verdict::WrongNotOnPrim;
     }
     if (!any.Found()) return Verdict::Agree;
     tr.AllHits(r, all);
     for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(tr, scene.IdOfUnified(h.g), r, h.t)))
+        return Verdict::WrongMissed;
     return Verdict::Tie;
   }
 
@@ -106,11 +109,12 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
     if (!ref.Found()) return Verdict::Agree;
     tr.AllHits(r, all);
     for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(tr, scene.IdOfUnified(h.g), r, h.t)))
+        return Verdict::WrongMissed;
     return Verdict::Tie;
   }
   const double t = hit.t;
-  const double delta = Delta(r, t);
+  const double delta = Delta(tr, hit.prim, r, t);
   if (ref.Found() && scene.IdOfUnified(ref.g) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
     *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
     return Verdict::Agree;
@@ -122,8 +126,9 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   // Nothing robust may lie before it.
   tr.AllHits(r, all);
   for (const RefHit& h : all) {
-    if ((t - h.t) * dl <= delta) continue;
-    if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongFarther;
+    const std::uint32_t hp = scene.IdOfUnified(h.g);
+    if ((t - h.t) * dl <= std::max(delta, Delta(tr, hp, r, h.t))) continue;
+    if (!Marginal(tr, hp, r, h.t, Delta(tr, hp, r, h.t))) return Verdict::WrongFarther;
   }
   return Verdict::Tie;
 }

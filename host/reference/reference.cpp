@@ -205,6 +205,27 @@ double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) 
   return best;
 }
 
+double ReferenceTracer::PrimScale(std::uint32_t prim) const
+{
+  std::vector<std::uint32_t> pieces;
+  PiecesOf(prim, pieces);
+  auto m = [](const float* p) { return std::max(std::fabs(double(p[0])), std::max(std::fabs(double(p[1])), std::fabs(double(p[2])))); };
+  double s = 0.0;
+  for (std::uint32_t g : pieces) {
+    if (g < counts_.nSpheres) {
+      const Sphere& sp = scene_.spheres[g];
+      s = std::max(s, m(sp.center) + sp.radius);
+    } else if (g < counts_.nSpheres + counts_.nTriangles) {
+      const Triangle& t = scene_.triangles[g - counts_.nSpheres];
+      s = std::max(s, std::max(m(t.v0), std::max(m(t.v1), m(t.v2))));
+    } else {
+      const Cone& c = scene_.cones[g - counts_.nSpheres - counts_.nTriangles];
+      s = std::max(s, std::max(m(c.base) + c.baseRadius, m(c.apex) + c.apexRadius));
+    }
+  }
+  return s;
+}
+
 glm::dvec3 ReferenceTracer::GeometricNormal(std::uint32_t g, const glm::dvec3& p) const
 {
   if (g < counts_.nSpheres) return SphereNormal(scene_.spheres[g], p);

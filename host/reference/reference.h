@@ -38,6 +38,10 @@ class ReferenceTracer {
   // Distance from p to the surface of primitive id `prim` (all its pieces);
   // INFINITY for an id without geometry.
   double DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) const;
+  // Largest coordinate magnitude of the points defining primitive `prim`
+  // (vertices; centre, base and apex plus radii): the scale of the rounding
+  // a float tracer makes when it intersects it.
+  double PrimScale(std::uint32_t prim) const;
   // Unified indices of the pieces of primitive id `prim`.
   void PiecesOf(std::uint32_t prim, std::vector<std::uint32_t>& out) const;
   // Geometric outward normal of piece g at p (unit length).
