@@ -34,6 +34,31 @@ void WriteImage(const std::string& path, int width, int height, const std::vecto
   });
 }
 
+namespace {
+OIIO::ImageBuf Display(int width, int height, const std::vector<float>& rgb)
+{
+  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
+  OIIO::ImageBuf lin(spec, const_cast<float*>(rgb.data()));
+  OIIO::ImageBuf srgb = OIIO::ImageBufAlgo::colorconvert(lin, "linear", "sRGB");
+  return OIIO::ImageBufAlgo::clamp(srgb, 0.0f, 1.0f);
+}
+}  // namespace
+
+ImageDiff CompareImages(int width, int height, const std::vector<float>& a, const std::vector<float>& b)
+{
+  if (a.size() != std::size_t(width) * height * 3 || b.size() != a.size())
+    throw RuntimeError("CompareImages: image sizes differ");
+  OIIO::ImageBuf A = Display(width, height, a), B = Display(width, height, b);
+  auto r = OIIO::ImageBufAlgo::compare(A, B, 1.0f / 255.0f, 1.0f / 255.0f);
+  ImageDiff d;
+  d.psnr = r.PSNR;
+  d.rmsError = r.rms_error;
+  d.meanError = r.meanerror;
+  d.maxError = r.maxerror;
+  d.nDiffering = std::size_t(r.nfail);
+  return d;
+}
+
 std::vector<float> ReadImage(const std::string& path, int& width, int& height)
 {
   OIIO::ImageBuf in(path);
