@@ -34,5 +34,6 @@ Run RegisterRays(CLI::App& app);
 Run RegisterTrace(CLI::App& app);
 Run RegisterCheck(CLI::App& app);
 Run RegisterRender(CLI::App& app);
+Run RegisterGen(CLI::App& app);
 
 }  // namespace cr::cli

@@ -7,8 +7,8 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
-#include "kernels/offset.h"
 #include "scene/camera.h"
+#include "scene/surface.h"
 
 namespace cr {
 
@@ -57,13 +57,6 @@ RayRecord Make(const glm::vec3& o, const glm::vec3& d, float tmin, float tmax)
   return r;
 }
 
-glm::vec3 Offset(const glm::vec3& p, const glm::vec3& n)
-{
-  float in[3] = {p.x, p.y, p.z}, nn[3] = {n.x, n.y, n.z}, out[3];
-  Offset_RayOrigin(in, nn, out);
-  return {out[0], out[1], out[2]};
-}
-
 // Secondary rays of one primary sample.
 void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind, const RayRecord& primary,
                std::uint64_t seed, std::uint64_t sample, std::vector<RayRecord>& out)
@@ -71,18 +64,17 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
   ref::DRay r = ref::MakeRay(primary);
   ref::RefHit h = tr.Intersect(r);
   if (!h.Found()) return;
-  glm::dvec3 p = r.o + h.t * r.d;
-  glm::dvec3 ng = tr.GeometricNormal(h.g, p);
-  glm::dvec3 ns = tr.ShadingNormal(h.g, p, h.u, h.v);
+  const SurfacePoint sp = SurfaceAt(scene, h.g, r.o + h.t * r.d, h.u, h.v);
+  glm::dvec3 ng(sp.ng), ns(sp.ns);
   if (glm::dot(ng, r.d) > 0.0) ng = -ng;  // face the viewer
   if (glm::dot(ns, r.d) > 0.0) ns = -ns;
-  const glm::vec3 pf = ToF(p);
+  const glm::dvec3 p(sp.p);
   if (kind == RayKind::Shadow) {
     for (const Light& l : scene.lights) {
       glm::dvec3 L = glm::dvec3(l.position) - p;
       if (glm::dot(ns, L) <= 0.0) continue;
       glm::dvec3 side = glm::dot(ng, L) >= 0.0 ? ng : -ng;
-      glm::vec3 o = Offset(pf, ToF(side));
+      glm::vec3 o = OffsetRayOrigin(sp.p, sp.error, ToF(side));
       glm::vec3 d = l.position - o;
       if (d == glm::vec3(0.0f)) continue;
       out.push_back(Make(o, d, 0.0f, 1.0f));
@@ -96,7 +88,7 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
     glm::dvec3 d = rad * std::cos(phi) * t1 + rad * std::sin(phi) * t2 + std::sqrt(std::max(0.0, 1.0 - u1)) * ng;
     glm::vec3 df = ToF(glm::normalize(d));
     if (df == glm::vec3(0.0f)) return;
-    out.push_back(Make(Offset(pf, ToF(ng)), df, 0.0f, INFINITY));
+    out.push_back(Make(OffsetRayOrigin(sp.p, sp.error, ToF(ng)), df, 0.0f, INFINITY));
   }
 }
 

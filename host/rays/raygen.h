@@ -1,6 +1,6 @@
 // `cellray rays`: deterministic ray sets of four kinds for benchmarks and
 // conformance. Secondary kinds start at primary hits found by the fp64
-// reference, offset robustly (kernels/offset.h).
+// reference, offset robustly (scene/surface.h).
 #pragma once
 
 #include <cstdint>

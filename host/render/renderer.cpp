@@ -9,11 +9,10 @@
 #include <tbb/parallel_for.h>
 
 #include "core/error.h"
-#include "kernels/offset.h"
 #include "rays/raygen.h"
-#include "reference/geometry_d.h"
 #include "render/progress.h"
 #include "scene/camera.h"
+#include "scene/surface.h"
 
 namespace cr {
 
@@ -72,16 +71,9 @@ RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
   return r;
 }
 
-glm::vec3 Offset(const glm::vec3& p, const glm::vec3& n)
-{
-  float in[3] = {p.x, p.y, p.z}, nn[3] = {n.x, n.y, n.z}, out[3];
-  Offset_RayOrigin(in, nn, out);
-  return {out[0], out[1], out[2]};
-}
-
 class Shader {
  public:
-  Shader(const Scene& scene, const RenderOptions& opt) : scene_(scene), opt_(opt), counts_(scene.Counts())
+  Shader(const Scene& scene, const RenderOptions& opt) : scene_(scene), opt_(opt)
   {
     const double nl = double(std::max<std::size_t>(1, scene.lights.size()));
     intensity_ = float(std::sqrt(nl) / (2.0 * nl));
@@ -105,34 +97,10 @@ class Shader {
     const Material& m = scene_.materials[info.material];
     const glm::dvec3 o(pr.ray.org[0], pr.ray.org[1], pr.ray.org[2]);
     const glm::dvec3 dd(pr.ray.dir[0], pr.ray.dir[1], pr.ray.dir[2]);
-    const glm::vec3 p = glm::vec3(o + double(hit.t) * dd);
+    const SurfacePoint sp = SurfaceAt(scene_, g, o + double(hit.t) * dd, hit.u, hit.v);
+    const glm::vec3 p = sp.p;
     const glm::vec3 d = glm::normalize(glm::vec3(dd));
-
-    // Outward geometric normal and shading normal.
-    glm::vec3 ng, ns;
-    if (g < counts_.nSpheres) {
-      ng = glm::vec3(ref::SphereNormal(scene_.spheres[g], glm::dvec3(p)));
-      ns = ng;
-    } else if (g < counts_.nSpheres + counts_.nTriangles) {
-      const std::uint32_t ti = g - counts_.nSpheres;
-      ng = glm::vec3(ref::TriangleNormal(scene_.triangles[ti]));
-      ns = ng;
-      if (scene_.HasPatchNormals()) {
-        const TriNormals& vn = scene_.triNormals[ti];
-        glm::vec3 s = (1.0f - hit.u - hit.v) * vn[0] + hit.u * vn[1] + hit.v * vn[2];
-        if (glm::dot(s, s) > 0.0f) ns = s;
-      }
-    } else {
-      ng = glm::vec3(ref::ConeNormal(scene_.cones[g - counts_.nSpheres - counts_.nTriangles], glm::dvec3(p)));
-      ns = ng;
-    }
-    ng = glm::normalize(ng);
-    ns = glm::normalize(ns);
-    if (glm::dot(ns, ng) < 0.0f) ns = -ns;  // patch normals follow the winding
-    if (info.insideVisible) {
-      ng = -ng;
-      ns = -ns;
-    }
+    glm::vec3 ng = sp.ng, ns = sp.ns;
     const glm::vec3 outward = ng;
     const bool transmitter = m.transmittance > 0.0f;
     // One-sided opaque surfaces keep their outward normal; two-sided ones
@@ -161,7 +129,7 @@ class Shader {
         c += glm::vec3(m.ks * std::pow(rv, m.shine));
       }
       const glm::vec3 side = glm::dot(ng, L) >= 0.0f ? ng : -ng;
-      const glm::vec3 so = Offset(p, side);
+      const glm::vec3 so = OffsetRayOrigin(p, sp.error, side);
       ShadowRay& s = shadows[l];
       s.ray = MakeRay(so, light.position - so, 1.0f);
       s.light = pr.weight * intensity_ * light.color * c;
@@ -210,14 +178,14 @@ class Shader {
       if (!opt_.spd && kr <= 0.0f) goto refraction;
       glm::vec3 rd = d - 2.0f * glm::dot(d, ns) * ns;
       const glm::vec3 side = glm::dot(rd, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = Offset(p, side);
+      const glm::vec3 ro = OffsetRayOrigin(p, sp.error, side);
       spawned[nSpawned++] = PathRay{MakeRay(ro, rd, INFINITY), pr.weight * kr * glm::vec3(1.0f), pr.sample,
                                     std::uint8_t(pr.depth + 1), RayType::Reflection};
     }
   refraction:
     if (refract) {
       const glm::vec3 side = glm::dot(refrDir, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = Offset(p, side);
+      const glm::vec3 ro = OffsetRayOrigin(p, sp.error, side);
       spawned[nSpawned++] = PathRay{MakeRay(ro, refrDir, INFINITY), pr.weight * kt * m.color, pr.sample,
                                     std::uint8_t(pr.depth + 1), RayType::Refraction};
     }
@@ -227,7 +195,6 @@ class Shader {
  private:
   const Scene& scene_;
   const RenderOptions& opt_;
-  PrimCounts counts_;
   float intensity_ = 1.0f;
   bool twoSidedOpaque_ = false;
 };

@@ -1,0 +1,197 @@
+#include "scene/generate.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "core/file_util.h"
+
+namespace cr {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void AddSphere(Scene& s, const glm::dvec3& c, double r, std::uint32_t material)
+{
+  PrimInfo info;
+  info.kind = PrimKind::kSphere;
+  info.material = material;
+  info.firstPiece = static_cast<std::uint32_t>(s.spheres.size());
+  info.nPieces = 1;
+  s.sphereIds.push_back(s.NumPrims());
+  s.spheres.push_back(Sphere{{float(c.x), float(c.y), float(c.z)}, float(r)});
+  s.prims.push_back(info);
+}
+
+void AddTriangle(Scene& s, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, std::uint32_t material)
+{
+  PrimInfo info;
+  info.kind = PrimKind::kPolygon;
+  info.material = material;
+  info.firstPiece = static_cast<std::uint32_t>(s.triangles.size());
+  info.nPieces = 1;
+  Triangle t{};
+  for (int k = 0; k < 3; ++k) {
+    t.v0[k] = float(a[k]);
+    t.v1[k] = float(b[k]);
+    t.v2[k] = float(c[k]);
+  }
+  t.flags = CR_TRI_REPORT_UV;
+  s.triangleIds.push_back(s.NumPrims());
+  s.triangles.push_back(t);
+  s.prims.push_back(info);
+}
+
+// A quad as two triangle primitives (WriteNFF writes triangles only).
+void AddQuad(Scene& s, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, const glm::dvec3& d,
+             std::uint32_t material)
+{
+  AddTriangle(s, a, b, c, material);
+  AddTriangle(s, a, c, d, material);
+}
+
+Scene Base(const glm::vec3& from, const glm::vec3& at, float angle)
+{
+  Scene s;
+  s.path = "generated";
+  s.background = glm::vec3(0.078f, 0.361f, 0.753f);
+  s.camera.from = from;
+  s.camera.at = at;
+  s.camera.up = glm::vec3(0.0f, 0.0f, 1.0f);
+  s.camera.angle = angle;
+  s.camera.hither = 0.01f;
+  s.hasCamera = true;
+  s.materials.push_back(Material{});
+  return s;
+}
+
+// balls.c's recursion: children at 6 equatorial and 3 upper directions,
+// rotated into the frame of the parent's direction.
+void Flake(Scene& s, const glm::dvec3& c, double r, const glm::dvec3& dir, int depth, std::uint32_t mat)
+{
+  AddSphere(s, c, r, mat);
+  if (depth == 0) return;
+  glm::dvec3 a = std::fabs(dir.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  glm::dvec3 u = glm::normalize(glm::cross(dir, a)), v = glm::cross(dir, u);
+  const double rc = r / 3.0;
+  for (int i = 0; i < 9; ++i) {
+    double elev = i < 6 ? 0.0 : 0.9 * kPi / 4.0 * 1.2;  // upper ring tilted toward dir
+    double az = i < 6 ? i * kPi / 3.0 : (i - 6) * 2.0 * kPi / 3.0 + kPi / 6.0;
+    glm::dvec3 d = std::cos(elev) * (std::cos(az) * u + std::sin(az) * v) + std::sin(elev) * dir;
+    d = glm::normalize(d);
+    Flake(s, c + d * (r + rc), rc, d, depth - 1, mat);
+  }
+}
+
+}  // namespace
+
+Scene GenerateSphereflake(int depth)
+{
+  if (depth < 0 || depth > 8) throw InputError(fmt::format("sphereflake depth {} is not in 0..8", depth));
+  Scene s = Base({2.1f, 1.3f, 1.7f}, {0.0f, 0.0f, 0.0f}, 45.0f);
+  s.lights = {Light{{4, 3, 2}, glm::vec3(1)}, Light{{1, -4, 4}, glm::vec3(1)}, Light{{-3, 1, 5}, glm::vec3(1)}};
+  s.materials.push_back(Material{{1.0f, 0.75f, 0.33f}, 0.8f, 0.0f, 100000.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{1.0f, 0.9f, 0.7f}, 0.5f, 0.5f, 3.0827f, 0.0f, 1.0f});
+  AddQuad(s, {12, 12, -0.5}, {-12, 12, -0.5}, {-12, -12, -0.5}, {12, -12, -0.5}, 1);
+  Flake(s, {0, 0, 0}, 0.5, {0, 0, 1}, depth, 2);
+  return s;
+}
+
+Scene GenerateBumpySphere(std::uint64_t triangles)
+{
+  if (triangles < 12 || triangles > (std::uint64_t(1) << 27))
+    throw InputError(fmt::format("mesh of {} triangles: expected 12 .. 2^27", triangles));
+  const int n = std::max(1, int(std::lround(std::sqrt(double(triangles) / 12.0))));
+  Scene s = Base({0.0f, -4.2f, 2.0f}, {0.0f, 0.0f, 0.0f}, 40.0f);
+  s.lights = {Light{{5, -6, 8}, glm::vec3(1)}, Light{{-7, -3, 2}, glm::vec3(1)}};
+  s.materials.push_back(Material{{0.8f, 0.8f, 0.85f}, 0.8f, 0.2f, 20.0f, 0.0f, 1.0f});
+  auto point = [&](int face, int i, int j) {
+    double a = 2.0 * i / n - 1.0, b = 2.0 * j / n - 1.0;
+    glm::dvec3 p;
+    switch (face) {
+      case 0: p = {1, a, b}; break;
+      case 1: p = {-1, b, a}; break;
+      case 2: p = {b, 1, a}; break;
+      case 3: p = {a, -1, b}; break;
+      case 4: p = {a, b, 1}; break;
+      default: p = {b, a, -1}; break;
+    }
+    p = glm::normalize(p);
+    double bump = 1.0 + 0.04 * std::sin(9.0 * p.x) * std::sin(11.0 * p.y) * std::sin(7.0 * p.z) +
+                  0.01 * std::sin(40.0 * p.x + 3.0 * p.z);
+    return p * bump;
+  };
+  s.prims.reserve(std::size_t(12) * n * n);
+  for (int f = 0; f < 6; ++f)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        glm::dvec3 p00 = point(f, i, j), p10 = point(f, i + 1, j), p01 = point(f, i, j + 1), p11 = point(f, i + 1, j + 1);
+        AddTriangle(s, p00, p10, p11, 1);
+        AddTriangle(s, p00, p11, p01, 1);
+      }
+  return s;
+}
+
+Scene GenerateStadium(int depth)
+{
+  if (depth < 0 || depth > 6) throw InputError(fmt::format("stadium object depth {} is not in 0..6", depth));
+  Scene s = Base({1.2f, -1.6f, 0.9f}, {0.0f, 0.0f, 0.1f}, 40.0f);
+  s.lights = {Light{{3000, -2000, 4000}, glm::vec3(1)}, Light{{-2, -3, 4}, glm::vec3(1)}};
+  s.materials.push_back(Material{{0.4f, 0.7f, 0.3f}, 0.9f, 0.0f, 1.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{0.9f, 0.9f, 0.9f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
+  const double half = 5000.0;
+  AddQuad(s, {half, half, -0.5}, {-half, half, -0.5}, {-half, -half, -0.5}, {half, -half, -0.5}, 1);
+  // A ring of 64 pillars (thin boxes) along the stadium's edge.
+  for (int k = 0; k < 64; ++k) {
+    double a = 2.0 * kPi * k / 64.0, R = 0.9 * half;
+    glm::dvec3 c(R * std::cos(a), R * std::sin(a), 0.0);
+    glm::dvec3 e1(20, 0, 0), e2(0, 20, 0), up(0, 0, 400);
+    glm::dvec3 lo = c - e1 - e2 + glm::dvec3(0, 0, -0.5);
+    glm::dvec3 p[8] = {lo, lo + 2.0 * e1, lo + 2.0 * e1 + 2.0 * e2, lo + 2.0 * e2};
+    for (int i = 0; i < 4; ++i) p[i + 4] = p[i] + up;
+    const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    for (const auto& f : faces) AddQuad(s, p[f[0]], p[f[1]], p[f[2]], p[f[3]], 2);
+  }
+  Flake(s, {0, 0, 0}, 0.25, {0, 0, 1}, depth, 2);
+  return s;
+}
+
+void WriteNFF(const Scene& s, const std::string& path)
+{
+  WriteAtomically(path, [&](const std::string& tmp) {
+    std::FILE* f = std::fopen(tmp.c_str(), "w");
+    if (!f) throw RuntimeError(fmt::format("{}: cannot write", path));
+    const Camera& c = s.camera;
+    fmt::print(f, "b {} {} {}\n", s.background.x, s.background.y, s.background.z);
+    fmt::print(f, "v\nfrom {} {} {}\nat {} {} {}\nup {} {} {}\nangle {}\nhither {}\nresolution {} {}\n", c.from.x,
+               c.from.y, c.from.z, c.at.x, c.at.y, c.at.z, c.up.x, c.up.y, c.up.z, c.angle, c.hither, c.width,
+               c.height);
+    for (const Light& l : s.lights)
+      fmt::print(f, "l {} {} {} {} {} {}\n", l.position.x, l.position.y, l.position.z, l.color.x, l.color.y, l.color.z);
+    std::uint32_t current = ~0u;
+    for (const PrimInfo& p : s.prims) {
+      if (p.material != current && p.material < s.materials.size()) {
+        const Material& m = s.materials[p.material];
+        fmt::print(f, "f {} {} {} {} {} {} {} {}\n", m.color.x, m.color.y, m.color.z, m.kd, m.ks, m.shine,
+                   m.transmittance, m.ior);
+        current = p.material;
+      }
+      if (p.kind == PrimKind::kSphere && p.nPieces) {
+        const Sphere& sp = s.spheres[p.firstPiece];
+        fmt::print(f, "s {} {} {} {}\n", sp.center[0], sp.center[1], sp.center[2], sp.radius);
+      } else if (p.kind == PrimKind::kPolygon && p.nPieces == 1) {
+        const Triangle& t = s.triangles[p.firstPiece];
+        fmt::print(f, "p 3\n{} {} {}\n{} {} {}\n{} {} {}\n", t.v0[0], t.v0[1], t.v0[2], t.v1[0], t.v1[1], t.v1[2],
+                   t.v2[0], t.v2[1], t.v2[2]);
+      } else {
+        throw RuntimeError("WriteNFF: only generated scenes (spheres and triangles) can be written");
+      }
+    }
+    if (std::fclose(f) != 0) throw RuntimeError(fmt::format("{}: write failed", path));
+  });
+}
+
+}  // namespace cr

@@ -1,0 +1,30 @@
+// Procedural scenes for scaling studies (10^3 .. 10^7 primitives) and the
+// classic failure case of uniform grids.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "scene/scene.h"
+
+namespace cr {
+
+// A sphereflake after SPD's balls.c (each sphere carries nine children of a
+// third of its radius, six around its equator and three above) on a ground
+// quad (two triangles); depth 4 has 7381 spheres, depth 7 has 5,380,840.
+Scene GenerateSphereflake(int depth);
+
+// A closed, bumpy triangle mesh of about `triangles` triangles: a sphere
+// tessellated as a cube projected onto it, each face an n x n grid, radius
+// modulated by a few sines.
+Scene GenerateBumpySphere(std::uint64_t triangles);
+
+// "Teapot in a stadium" (Haines): a dense object (a sphereflake of the given
+// depth, 1 unit across) at the centre of a sparse scene 10^4 units across
+// (a ground plane, a ring of large pillars), the camera close to the object.
+Scene GenerateStadium(int depth);
+
+// Writes a generated scene (spheres and triangles) as NFF.
+void WriteNFF(const Scene& scene, const std::string& path);
+
+}  // namespace cr

@@ -1,0 +1,42 @@
+// Surface points of hits and robust origins for the rays that leave them.
+//
+// The hit point is reprojected onto the surface in double (barycentric
+// interpolation on triangles, radial projection on spheres and cones), so it
+// does not inherit the error of the hit's t. The origin of a secondary ray is
+// then moved off the surface along the normal by an error bound, in the
+// manner of pbrt-v4's OffsetRayOrigin (Pharr, Jakob & Humphreys, 4th ed.,
+// 6.8.6): not a fixed epsilon, but the distance within which a float32
+// intersector can still find the surface it leaves. That distance scales with
+// the primitive's own coordinates (a watertight test on a triangle whose
+// vertices lie 5000 units away errs by ~1e-4 even where it is hit near the
+// origin), so the bound is
+//   error = 2^-19 * S + 2^-22 * |p|_inf,
+// S being the largest coordinate magnitude of the primitive's defining points
+// (the scale the checker's tolerance uses too, host/reference/check.h).
+#pragma once
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "scene/scene.h"
+
+namespace cr {
+
+struct SurfacePoint {
+  glm::vec3 p{0.0f};   // on the surface, rounded to float
+  float error = 0.0f;  // how far off the surface a float intersector may place it
+  glm::vec3 ng{0.0f};  // outward geometric normal (unit; inward for inside-visible primitives)
+  glm::vec3 ns{0.0f};  // shading normal (unit; patch normals interpolated), on ng's side
+};
+
+// The surface point of a hit on unified piece g near pApprox, with the hit's
+// barycentrics (u weights v1, v weights v2) for triangle pieces.
+SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v);
+
+// Origin for a ray leaving the surface to the side of n (unit, with
+// dot(n, ng) != 0): p moved by `error` along n, each component rounded away
+// from the surface so the move survives rounding.
+glm::vec3 OffsetRayOrigin(const glm::vec3& p, float error, const glm::vec3& n);
+
+}  // namespace cr
