@@ -50,7 +50,7 @@ CR_FUNC void Quadratic_Roots(real a, real bh, real c, real disc, real* t0, real*
 CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin, real tmax, real* tHit)
 {
   real f[3];
-  for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
+  CR_UNROLL for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
   real rad = (real)s->radius;
   real a = Dot3(r->dir, r->dir);
   real bh = Dot3(f, r->dir);
@@ -92,7 +92,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
 #ifdef CR_FAST
   /* Moller & Trumbore 1997, fixed epsilon on the determinant. */
   real e1[3], e2[3], pv[3], tv[3], qv[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     e1[i] = (real)tri->v1[i] - (real)tri->v0[i];
     e2[i] = (real)tri->v2[i] - (real)tri->v0[i];
     tv[i] = r->org[i] - (real)tri->v0[i];
@@ -123,7 +123,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
    * shared edge or vertex. */
   const int kx = r->kx, ky = r->ky, kz = r->kz;
   real A[3], B[3], C[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     A[i] = (real)tri->v0[i] - r->org[i];
     B[i] = (real)tri->v1[i] - r->org[i];
     C[i] = (real)tri->v2[i] - r->org[i];
@@ -155,19 +155,19 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
 CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, real tmax, real* tHit)
 {
   real w[3], dl[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     w[i] = (real)cn->apex[i] - (real)cn->base[i];
     dl[i] = r->org[i] - (real)cn->base[i];
   }
   const real H = sqrt(Dot3(w, w));
   if (!(H > (real)0.0f)) return 0;
-  for (int i = 0; i < 3; ++i) w[i] = w[i] / H;
+  CR_UNROLL for (int i = 0; i < 3; ++i) w[i] = w[i] / H;
   const real r0 = (real)cn->baseRadius;
   const real k = ((real)cn->apexRadius - r0) / H;
   const real ds = Dot3(r->dir, w);
   const real os = Dot3(dl, w);
   real dR[3], oR[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     dR[i] = r->dir[i] - ds * w[i];
     oR[i] = dl[i] - os * w[i];
   }
@@ -193,7 +193,7 @@ CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, re
      * the same cure as for spheres, no cancellation between two large
      * squares when the cone is thin and far away. */
     real e[3], x[3];
-    for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
+    CR_UNROLL for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
     x[0] = oR[1] * dR[2] - oR[2] * dR[1];
     x[1] = oR[2] * dR[0] - oR[0] * dR[2];
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
@@ -260,7 +260,7 @@ CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bm
   real tn = tmin, tf = tmax;
   real boxFar = (real)CR_INF;
   real boxNear = -(real)CR_INF;
-  for (int a = 0; a < 3; ++a) {
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
     real lo = ((real)bmin[a] - r->org[a]) * r->inv[a];
     real hi = ((real)bmax[a] - r->org[a]) * r->inv[a];
     real n = r->inv[a] < (real)0.0f ? hi : lo;

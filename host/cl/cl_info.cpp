@@ -1,8 +1,6 @@
 #include "cl/cl_info.h"
 
-#define CL_HPP_TARGET_OPENCL_VERSION 120
-#define CL_HPP_MINIMUM_OPENCL_VERSION 120
-#include <CL/opencl.hpp>
+#include "cl/cl_api.h"
 
 namespace cr {
 
