@@ -11,6 +11,8 @@
  *   CR_UNIFIED = 0|1                  unified hit records; absent: argument
  *   CR_STATS                          per-ray counters written to `stats`
  *   CR_VARIANT_RAY, CR_VARIANT_PACKET the kernels compiled (absent: both)
+ *   CR_SOURCE_RAYS, CR_SOURCE_CAMERA  rays from a buffer or generated here
+ *                                     (absent: both)
  *   CR_PACKET_W, CR_PACKET_H          work-group tile of the packet kernels
  *   CR_CAMERA_FP64                    primary rays generated in double, as
  *                                     host/scene/camera.cpp does (bit-equal)
@@ -178,6 +180,7 @@ CR_FUNC void Trace_One(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR
 #define CR_TRACE_ONE_ARGS bvhNodes, bvhRefs, grid, cellStart, gridRefs, octree, octNodes, octRefs, accel
 
 /* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]. */
+#ifndef CR_SOURCE_CAMERA
 __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
                          CR_GLOBAL TraceStats* stats)
 {
@@ -195,6 +198,9 @@ __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint 
   Trace_StoreStats(stats, i, &st);
 }
 
+#endif
+
+#ifndef CR_SOURCE_RAYS
 /* Per-ray variant of the camera's primary rays, generated here; the 2D range
  * covers the image in tiles; hits are row-major. */
 __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 right, camreal4 up, camreal tanHalf,
@@ -216,6 +222,7 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   Trace_StoreStats(stats, i, &st);
 }
 
+#endif
 #endif /* !CR_VARIANT_PACKET */
 
 #if defined(CR_WITH_BVH) && !defined(CR_VARIANT_RAY)
@@ -250,6 +257,7 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, 
   return hit;
 }
 
+#ifndef CR_SOURCE_CAMERA
 /* Packet variant: the work-group is a packet (consecutive rays) that walks the
  * BVH together (bvh_packet.cl). Lanes past nRays take part without a ray. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
@@ -271,6 +279,9 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_
   }
 }
 
+#endif
+
+#ifndef CR_SOURCE_RAYS
 /* Packet variant of the primary rays: the work-group is a CR_PACKET_W x
  * CR_PACKET_H screen tile. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void Trace_PrimaryPacket(
@@ -293,4 +304,5 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
   }
 }
 
+#endif
 #endif /* packet BVH */

@@ -29,7 +29,8 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic)
 
 const char* ClVariantName(ClVariant v) { return v == ClVariant::Packet ? "packet" : "ray"; }
 
-ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, const ClDevice& dev)
+ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
+                                const ClDevice& dev)
 {
   ClProgramSpec s;
   ParseClVariant(config.variant, s.variant, s.generic);
@@ -41,6 +42,7 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
   s.anyHit = occlusion;
+  s.camera = camera;
   s.unified = config.unifiedHits;
   s.precision = config.precision;
   s.stats = config.stats;
@@ -77,6 +79,7 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
     }
     o += fmt::format(" -DCR_ANYHIT={} -DCR_UNIFIED={}", int(s.anyHit), int(s.unified));
     o += s.variant == ClVariant::Packet ? " -DCR_VARIANT_PACKET" : " -DCR_VARIANT_RAY";
+    o += s.camera ? " -DCR_SOURCE_CAMERA" : " -DCR_SOURCE_RAYS";
   }
   for (const auto& d : s.defines) o += " -D" + d;
   return o;

@@ -24,6 +24,7 @@ struct ClProgramSpec {
   Precision precision = Precision::Robust;
   bool stats = false;
   ClVariant variant = ClVariant::Ray;
+  bool camera = false;           // primary rays generated on the device, else rays from a buffer
   int packetW = 8, packetH = 8;  // work-group tile of the packet kernels
   bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's
   // Hook for the renderer's kernels: extra "NAME=VALUE" definitions (material
@@ -34,7 +35,9 @@ struct ClProgramSpec {
 // The spec for tracing `scene` with `config` (query kind `occlusion`) on
 // `dev`. InputError when the device cannot do it (fp64 without cl_khr_fp64,
 // an unknown --variant).
-ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, const ClDevice& dev);
+// `camera`: the program traces primary rays it generates (TracePrimary).
+ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
+                                const ClDevice& dev);
 
 // "-cl-std=CL1.2 -DCR_ACCEL_BVH ...": never fast-math flags; correctly
 // rounded divide and sqrt where the device offers them (the C++ build rounds

@@ -90,18 +90,18 @@ class ClTracer final : public Tracer {
   {
     ParseClVariant(cfg.variant, variant_, generic_);
     // Validate the device and options before the (slow) structure build.
-    (void)MakeClProgramSpec(scene, cfg, false, cl_.dev);
+    (void)MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
     AccelData data = BuildAccel(scene, cfg.accel, cfg.params);
     info_ = data.info;
     Upload(data);
   }
 
-  void Prepare(bool occlusion) override { (void)Program(occlusion); }
+  void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
 
   void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
              TraceStatsSum* stats) override
   {
-    Built& p = Program(occlusion);
+    Built& p = Program(occlusion, false);
     hits.resize(rays.size());
     if (rays.empty()) return;
     const std::size_t n = rays.size();
@@ -110,10 +110,10 @@ class ClTracer final : public Tracer {
     CR_CL_CHECK_WHAT(cl_.queue.enqueueWriteBuffer(rayBuf_, CL_FALSE, 0, n * sizeof(RayRecord), rays.data()),
                      "clEnqueueWriteBuffer", "rays");
     cl::Kernel& k = p.rays;
-    SetArg(k, kArgRays, rayBuf_, "Trace_Rays");
-    SetArg(k, kArgNRays, cl_uint(n), "Trace_Rays");
-    SetArg(k, kArgRaysHits, hitBuf_, "Trace_Rays");
-    SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, "Trace_Rays");
+    SetArg(k, kArgRays, rayBuf_, p.raysName);
+    SetArg(k, kArgNRays, cl_uint(n), p.raysName);
+    SetArg(k, kArgRaysHits, hitBuf_, p.raysName);
+    SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, p.raysName);
     const std::size_t local = std::size_t(p.spec.packetW) * std::size_t(p.spec.packetH);
     CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(RoundUp(n, local)),
                                                    cl::NDRange(local)),
@@ -124,7 +124,7 @@ class ClTracer final : public Tracer {
   void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
                     TraceStatsSum* stats) override
   {
-    Built& p = Program(false);
+    Built& p = Program(false, true);
     if (width <= 0 || height <= 0) {
       hits.clear();
       return;
@@ -134,8 +134,8 @@ class ClTracer final : public Tracer {
     EnsureRayBuffers(n, false);
     cl::Kernel& k = p.primary;
     SetPrimaryArgs(k, p, frame, width, height);
-    SetArg(k, kArgPrimaryHits, hitBuf_, "Trace_Primary");
-    SetArg(k, kArgPrimaryStats, config_.stats ? statsBuf_ : dummy_, "Trace_Primary");
+    SetArg(k, kArgPrimaryHits, hitBuf_, p.primaryName);
+    SetArg(k, kArgPrimaryStats, config_.stats ? statsBuf_ : dummy_, p.primaryName);
     const std::size_t lw = std::size_t(p.spec.packetW), lh = std::size_t(p.spec.packetH);
     CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange,
                                                    cl::NDRange(RoundUp(std::size_t(width), lw),
@@ -178,71 +178,87 @@ class ClTracer final : public Tracer {
   }
 
  private:
+  // One program and its kernels: Trace_Rays* (rays from a buffer) and/or
+  // Trace_Primary* (camera rays generated on the device).
   struct Built {
     ClProgramSpec spec;
     ClProgram program;
     cl::Kernel rays, primary;
     const char* raysName = "";
     const char* primaryName = "";
-    double jitMs = 0.0;  // first (empty) launch of each kernel: drivers that compile per work-group size do it here
+    bool hasRays = false, hasPrimary = false;
+    double jitMs = 0.0;  // first (empty) launches: drivers that compile per work-group size do it here
   };
 
-  Built& Program(bool occlusion)
+  // Programs are specialised to the query kind and the ray source, built on
+  // first use: rays closest, rays occlusion, camera. A generic program
+  // serves all three.
+  Built& Program(bool occlusion, bool camera)
   {
-    // A generic program answers both query kinds (by argument).
-    const std::size_t slot = generic_ ? 0 : (occlusion ? 1 : 0);
-    if (!built_[slot]) built_[slot] = Build(occlusion);
+    const std::size_t slot = generic_ ? 0 : camera ? 2 : (occlusion ? 1 : 0);
+    if (!built_[slot]) built_[slot] = Build(occlusion, camera);
     Built& b = *built_[slot];
-    SetArg(b.rays, kArgAnyHit, cl_int(occlusion), b.raysName);
-    SetArg(b.primary, kArgAnyHit, cl_int(occlusion), b.primaryName);
+    if (b.hasRays) SetArg(b.rays, kArgAnyHit, cl_int(occlusion), b.raysName);
+    if (b.hasPrimary) SetArg(b.primary, kArgAnyHit, cl_int(0), b.primaryName);
     return b;
   }
 
-  std::unique_ptr<Built> Build(bool occlusion)
+  std::unique_ptr<Built> Build(bool occlusion, bool camera)
   {
     auto b = std::make_unique<Built>();
-    b->spec = MakeClProgramSpec(scene_, config_, occlusion, cl_.dev);
+    b->spec = MakeClProgramSpec(scene_, config_, occlusion, camera, cl_.dev);
     b->program = BuildClProgram(cl_.context, cl_.dev, ClKernelSource(), ClBuildOptions(b->spec, cl_.dev));
     const bool packet = b->spec.variant == ClVariant::Packet;
+    b->hasRays = generic_ || !camera;
+    b->hasPrimary = generic_ || camera;
     b->raysName = packet ? "Trace_RaysPacket" : "Trace_Rays";
     b->primaryName = packet ? "Trace_PrimaryPacket" : "Trace_Primary";
-    cl_int err = CL_SUCCESS;
-    b->rays = cl::Kernel(b->program.program, b->raysName, &err);
-    CR_CL_CHECK_WHAT(err, "clCreateKernel", b->raysName);
-    b->primary = cl::Kernel(b->program.program, b->primaryName, &err);
-    CR_CL_CHECK_WHAT(err, "clCreateKernel", b->primaryName);
-    for (cl::Kernel* k : {&b->rays, &b->primary}) {
-      const char* name = k == &b->rays ? b->raysName : b->primaryName;
-      BindScene(*k, name);
-      SetArg(*k, kArgAnyHit, cl_int(occlusion), name);
-      std::size_t wg = 0;
-      CR_CL_CHECK_WHAT(k->getWorkGroupInfo(cl_.dev.device, CL_KERNEL_WORK_GROUP_SIZE, &wg),
-                       "clGetKernelWorkGroupInfo", name);
-      if (wg < std::size_t(b->spec.packetW) * std::size_t(b->spec.packetH))
-        throw RuntimeError(fmt::format("OpenCL: kernel {} runs at most {} work-items per group on '{}', fewer than "
-                                       "the {}x{} it needs",
-                                       name, wg, cl_.dev.name, b->spec.packetW, b->spec.packetH));
-    }
+    const std::size_t lw = std::size_t(b->spec.packetW), lh = std::size_t(b->spec.packetH);
+    const auto t0 = std::chrono::steady_clock::now();
     // First launches, empty (no ray, 0x0 image): a driver that compiles each
     // kernel for its work-group size (PoCL) does it now, not in a timed Trace.
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::size_t local = std::size_t(b->spec.packetW) * std::size_t(b->spec.packetH);
-    SetArg(b->rays, kArgRays, dummy_, b->raysName);
-    SetArg(b->rays, kArgNRays, cl_uint(0), b->raysName);
-    SetArg(b->rays, kArgRaysHits, dummy_, b->raysName);
-    SetArg(b->rays, kArgRaysStats, dummy_, b->raysName);
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->rays, cl::NullRange, cl::NDRange(local), cl::NDRange(local)),
-                     "clEnqueueNDRangeKernel", b->raysName);
-    SetPrimaryArgs(b->primary, *b, MakeCameraFrame(scene_.camera, 1, 1), 0, 0);
-    SetArg(b->primary, kArgPrimaryHits, dummy_, b->primaryName);
-    SetArg(b->primary, kArgPrimaryStats, dummy_, b->primaryName);
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(
-                         b->primary, cl::NullRange, cl::NDRange(std::size_t(b->spec.packetW), std::size_t(b->spec.packetH)),
-                         cl::NDRange(std::size_t(b->spec.packetW), std::size_t(b->spec.packetH))),
-                     "clEnqueueNDRangeKernel", b->primaryName);
+    if (b->hasRays) {
+      b->rays = MakeKernel(*b, b->raysName);
+      SetArg(b->rays, kArgAnyHit, cl_int(occlusion), b->raysName);
+      SetArg(b->rays, kArgRays, dummy_, b->raysName);
+      SetArg(b->rays, kArgNRays, cl_uint(0), b->raysName);
+      SetArg(b->rays, kArgRaysHits, dummy_, b->raysName);
+      SetArg(b->rays, kArgRaysStats, dummy_, b->raysName);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->rays, cl::NullRange, cl::NDRange(lw * lh),
+                                                     cl::NDRange(lw * lh)),
+                       "clEnqueueNDRangeKernel", b->raysName);
+    }
+    if (b->hasPrimary) {
+      b->primary = MakeKernel(*b, b->primaryName);
+      SetArg(b->primary, kArgAnyHit, cl_int(0), b->primaryName);
+      SetPrimaryArgs(b->primary, *b, MakeCameraFrame(scene_.camera, 1, 1), 0, 0);
+      SetArg(b->primary, kArgPrimaryHits, dummy_, b->primaryName);
+      SetArg(b->primary, kArgPrimaryStats, dummy_, b->primaryName);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->primary, cl::NullRange, cl::NDRange(lw, lh),
+                                                     cl::NDRange(lw, lh)),
+                       "clEnqueueNDRangeKernel", b->primaryName);
+    }
     CR_CL_CHECK(cl_.queue.finish(), "clFinish");
     b->jitMs = MsSince(t0);
     return b;
+  }
+
+  // A kernel of the program with the scene bound, checked against the
+  // device's work-group limit for this kernel.
+  cl::Kernel MakeKernel(const Built& b, const char* name)
+  {
+    cl_int err = CL_SUCCESS;
+    cl::Kernel k(b.program.program, name, &err);
+    CR_CL_CHECK_WHAT(err, "clCreateKernel", name);
+    BindScene(k, name);
+    std::size_t wg = 0;
+    CR_CL_CHECK_WHAT(k.getWorkGroupInfo(cl_.dev.device, CL_KERNEL_WORK_GROUP_SIZE, &wg), "clGetKernelWorkGroupInfo",
+                     name);
+    if (wg < std::size_t(b.spec.packetW) * std::size_t(b.spec.packetH))
+      throw RuntimeError(fmt::format("OpenCL: kernel {} runs at most {} work-items per group on '{}', fewer than "
+                                     "the {}x{} it needs",
+                                     name, wg, cl_.dev.name, b.spec.packetW, b.spec.packetH));
+    return k;
   }
 
   void BindScene(cl::Kernel& k, const char* name)
@@ -360,7 +376,7 @@ class ClTracer final : public Tracer {
   ClContext cl_;
   ClVariant variant_ = ClVariant::Ray;
   bool generic_ = false;
-  std::unique_ptr<Built> built_[2];  // closest, occlusion (a generic program uses slot 0 for both)
+  std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
   cl::Buffer dummy_, spheres_, triangles_, cones_, primIds_;
   cl::Buffer bvhNodes_, bvhRefs_, gridHeader_, cellStart_, gridRefs_, octHeader_, octNodes_, octRefs_;
   cl::Buffer rayBuf_, hitBuf_, statsBuf_;

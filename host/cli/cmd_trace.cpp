@@ -109,7 +109,7 @@ Run RegisterTrace(CLI::App& app)
     const std::size_t nRays = o->primary.empty() ? rays.size() : std::size_t(width) * std::size_t(height);
     const CameraFrame frame = MakeCameraFrame(scene.camera, width, height);
     auto tracer = CreateTracer(scene, cfg);
-    tracer->Prepare(o->occlusion);
+    tracer->Prepare(o->occlusion, !o->primary.empty());
     std::vector<HitRecord> hits;
     std::vector<double> times;
     TraceStatsSum stats;

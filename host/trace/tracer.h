@@ -71,8 +71,13 @@ class Tracer {
   virtual void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
                             TraceStatsSum* stats);
   // Does the one-time work a query kind needs (compiling kernels) so that
-  // timed Trace calls measure tracing only. Trace calls it when needed.
-  virtual void Prepare(bool occlusion) { (void)occlusion; }
+  // timed Trace (primary: TracePrimary) calls measure tracing only. They
+  // do it themselves when it was not done.
+  virtual void Prepare(bool occlusion, bool primary = false)
+  {
+    (void)occlusion;
+    (void)primary;
+  }
   // Backend-specific fields for the trace JSON (e.g. program_build_ms).
   virtual void Describe(nlohmann::json& j) const { (void)j; }
   virtual std::string DeviceName() const = 0;
