@@ -12,8 +12,8 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "rays/raygen.h"
-#include "reference/reference.h"
 #include "render/image_io.h"
+#include "scene/camera.h"
 
 namespace cr::cli {
 
@@ -38,11 +38,10 @@ Run RegisterRender(CLI::App& app)
     RayGenOptions g;
     if (!o->size.empty()) ParseSize(o->size, g.width, g.height);
     const int w = g.width ? g.width : scene.camera.width, h = g.height ? g.height : scene.camera.height;
-    ref::ReferenceTracer none(scene);  // primary rays need no tracer; the API takes one
-    std::vector<RayRecord> rays = GenerateRays(scene, none, g);
     auto tracer = CreateTracer(scene, cfg);
     std::vector<HitRecord> hits;
-    tracer->Trace(rays, hits, false, nullptr);
+    // Device backends generate the primary rays where they trace them.
+    tracer->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, hits, nullptr);
     float tmin = INFINITY, tmax = 0.0f;
     for (const auto& hr : hits)
       if (hr.prim != CR_NO_HIT) {
@@ -58,7 +57,7 @@ Run RegisterRender(CLI::App& app)
     }
     WriteImage(o->out, w, h, rgb);
     std::size_t nHit = std::count_if(hits.begin(), hits.end(), [](const HitRecord& x) { return x.prim != CR_NO_HIT; });
-    nlohmann::json j{{"scene", o->scene}, {"output", o->out}, {"width", w}, {"height", h}, {"rays", rays.size()},
+    nlohmann::json j{{"scene", o->scene}, {"output", o->out}, {"width", w}, {"height", h}, {"rays", hits.size()},
                      {"hits", nHit}, {"image", "hit depth"}};
     std::cout << j.dump() << std::endl;
     return 0;
