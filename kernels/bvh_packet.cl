@@ -4,14 +4,15 @@
  * GPU ray tracing", 2010) and Aila & Laine 2009 (sec. 3, "packet traversal").
  *
  * Every iteration visits one node for the whole group: each live lane tests
- * the node's box against its own ray and current hit; a lane inside a leaf
- * intersects the leaf's primitives (the trip count is the leaf's, the same
- * for all lanes). The lanes' verdicts go to local memory; after a barrier one
- * lane reduces them and updates the shared stack: at an interior node that
- * some lane entered, descend to the child that most lanes reach first and
- * push the other; otherwise pop. The next node and the loop condition come
- * from local memory, so all work-items take the same path (PoCL vectorises
- * the work-item loops of such regions; per-lane early exits would not).
+ * the node's box against its own ray and current hit. The lanes' verdicts go
+ * to local memory; after a barrier one lane reduces them and updates the
+ * shared stack: at an interior node that some lane entered, descend to the
+ * child that most lanes reach first and push the other; otherwise pop. At a
+ * leaf that some lane entered, the group loops over its primitives and each
+ * lane that entered keeps a closer hit (the trip count is the leaf's, the
+ * same for all lanes). The next node and the loop conditions come from local
+ * memory, so all work-items take the same path (PoCL vectorises the
+ * work-item loops of such regions; per-lane early exits would not).
  *
  * The answer is the per-ray one: every box test is conservative and per
  * lane, and Hit_Closer makes the closest hit independent of the order. An
@@ -22,25 +23,65 @@
 
 #define CR_PACKET_END 0xFFFFFFFFu
 
-/* Lane vote at an interior node: 1 when the ray probably reaches child
- * first + 1 before child first, judged on the axis that separates the two
- * children's centres most (one sign test, no box test). Reads only valid
- * nodes whatever `n` is (a leaf compares itself with itself). */
-CR_FUNC uint BVHPacket_SecondFirst(CR_GLOBAL const BVHNode* nodes, uint ni, uint interior, const Ray* ray)
+/* The node the group visits next, as lane 0 publishes it in local memory
+ * (CR_PACKET_NODE_FIELDS floats): its box, whether it is interior, and for
+ * an interior node the axis that separates its children's centres most as a
+ * signed unit weight per axis (sign: the second child's side). Every lane
+ * then reads the same local words (loaded once per vector of lanes, rather
+ * than gathered per lane from global memory). */
+#define CR_PACKET_NODE_FIELDS 10
+
+CR_FUNC void BVHPacket_PublishNode(CR_GLOBAL const BVHNode* nodes, uint ni, __local float* sNode)
 {
-  CR_GLOBAL const BVHNode* a = nodes + (interior ? nodes[ni].first : ni);
-  CR_GLOBAL const BVHNode* b = a + (interior ? 1 : 0);
-  /* Selects, not an index by axis: the work-item loop must stay branch-free. */
-  float sep = 0.0f, best = -1.0f;
-  int neg = 0;
+  CR_GLOBAL const BVHNode* n = nodes + ni;
   CR_UNROLL for (int k = 0; k < 3; ++k) {
-    const float d = (b->bmin[k] + b->bmax[k]) - (a->bmin[k] + a->bmax[k]);
-    const int better = d * d > best;
-    best = better ? d * d : best;
-    sep = better ? d : sep;
-    neg = better ? (ray->dir[k] < (real)0.0f) : neg;
+    sNode[k] = n->bmin[k];
+    sNode[3 + k] = n->bmax[k];
+    sNode[6 + k] = 0.0f;
   }
-  return (sep > 0.0f) == (neg != 0) ? 1u : 0u;
+  sNode[9] = n->count == 0 ? 1.0f : 0.0f;
+  if (n->count == 0) {
+    CR_GLOBAL const BVHNode* a = nodes + n->first;
+    CR_GLOBAL const BVHNode* b = a + 1;
+    float best = -1.0f, sep = 0.0f;
+    int axis = 0;
+    for (int k = 0; k < 3; ++k) {
+      const float d = (b->bmin[k] + b->bmax[k]) - (a->bmin[k] + a->bmax[k]);
+      if (fabs(d) > best) {
+        best = fabs(d);
+        sep = d;
+        axis = k;
+      }
+    }
+    sNode[6 + axis] = sep > 0.0f ? 1.0f : -1.0f;
+  }
+}
+
+/* Box_Intersect (intersect.h) with the same arithmetic, on a box in local
+ * memory. */
+CR_FUNC int BVHPacket_Box(__local const float* box, const Ray* r, real tmin, real tmax)
+{
+  real tn = tmin, tf = tmax;
+  real boxFar = (real)CR_INF;
+  real boxNear = -(real)CR_INF;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    real lo = ((real)box[a] - r->org[a]) * r->inv[a];
+    real hi = ((real)box[3 + a] - r->org[a]) * r->inv[a];
+    real n = r->inv[a] < (real)0.0f ? hi : lo;
+    real f = r->inv[a] < (real)0.0f ? lo : hi;
+    boxNear = fmax(boxNear, n);
+    boxFar = fmin(boxFar, f);
+  }
+#ifndef CR_FAST
+#ifdef CR_FP64
+  boxFar = boxFar * (real)1.0000000000000007;
+#else
+  boxFar = boxFar * 1.0000004f;
+#endif
+#endif
+  tn = fmax(tn, boxNear);
+  tf = fmin(tf, boxFar);
+  return tn <= tf;
 }
 
 /* The packet's rays and hits live in local memory, one array per field
@@ -121,44 +162,53 @@ CR_FUNC int BVHPacket_Commit(Hit* hit, int want, real t, real u, real v, uint g)
 /* Closest or any hit of each lane's ray, already stored in sRay, sAxes, sHit,
  * sHitG with BVHPacket_StoreRay / BVHPacket_StoreHit (read the answer back
  * with BVHPacket_LoadHit after it returns); `live` is 0 for a lane without a
- * ray. sStack holds CR_BVH_STACK node indices, sLane one word per lane (the
- * lanes' verdicts), sState six words (next node, stack size, leaf range by
- * type). sStack, sLane and sState pass values between work-items across
- * barriers and must not be (a compiler may then keep their values
- * across a barrier); the per-lane ray and hit arrays are.
+ * ray. Local memory: sStack CR_BVH_STACK node indices, sLane one word per
+ * lane (the lanes' verdicts), sState four words (next node, stack size,
+ * leaf range), sNode the node under test. None may be restrict: values pass between
+ * work-items across barriers, and a compiler may keep a restrict-qualified
+ * value across a call it does not give the pointer to (the barrier).
  * Every work-item of the group must call it (it contains barriers).
  *
  * Each step between two barriers is straight-line code per lane (a box test;
- * one primitive test of a type known to the whole group; the reduction, by
- * lane 0), so that the work-item loop PoCL builds around it has no inner loop
- * and no branch on a lane's data, and can be vectorised: the loops over a
- * leaf's primitives are group-level loops with a barrier in their body, and
- * every lane computes every test, keeping the result only where it wants it. */
+ * one primitive test; the reduction, by lane 0), so that the work-item loop
+ * PoCL builds around it has no inner loop and no branch on a lane's data,
+ * and can be vectorised: the loops over a leaf's primitives are group-level
+ * loops with barriers in their body, every lane computes every test and
+ * keeps the result only where it wants it, and the node all lanes test is
+ * in local memory at a fixed address, loaded once per vector of lanes
+ * rather than gathered per lane from global memory.
+ *
+ * (Tried and dropped on PoCL 3.1: the primitive copied to local memory the
+ * same way costs one more barrier per primitive and measured no faster;
+ * separate loops per primitive type, each with barriers, produced wrong
+ * answers, hence one loop with a branch on the type, uniform in practice.) */
 CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs, const PrimView* pv,
                              int anyHit, TraceStats* st, int live, uint lid, uint nLanes,
                              __local uint* sStack, __local uint* sLane, __local uint* sState,
-                             __local real* sRay,
+                             __local float* sNode, __local real* sRay,
                              __local uint* sAxes, __local real* sHit,
                              __local uint* sHitG)
 {
   if (lid == 0) {
     sState[0] = 0;
     sState[1] = 0;
+    BVHPacket_PublishNode(nodes, 0, sNode);
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   for (;;) {
     const uint ni = sState[0];
     if (ni == CR_PACKET_END) break;
-    /* Step 1, every lane: the node's box against the lane's ray. */
-    const uint interior = nodes[ni].count == 0 ? 1u : 0u;
+    /* Step 1, every lane: the node's box against the lane's ray, and the
+     * lane's vote on the order of the children. */
+    const uint interior = sNode[9] != 0.0f ? 1u : 0u;
     int in;
     uint vote;
     {
       Ray ray;
       BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      real tEnter;
-      in = live & Box_Intersect(nodes[ni].bmin, nodes[ni].bmax, &ray, ray.tmin, sHit[lid], &tEnter);
-      vote = BVHPacket_SecondFirst(nodes, ni, interior, &ray) & (uint)in & interior;
+      in = live & BVHPacket_Box(sNode, &ray, ray.tmin, sHit[lid]);
+      const real w = (real)sNode[6] * ray.dir[0] + (real)sNode[7] * ray.dir[1] + (real)sNode[8] * ray.dir[2];
+      vote = (w < (real)0.0f ? 1u : 0u) & (uint)in & interior;
     }
 #ifdef CR_STATS
     st->nTS += (uint)in;
@@ -166,8 +216,8 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
 #endif
     sLane[lid] = (uint)in | (vote << 1) | ((uint)live << 2);
     barrier(CLK_LOCAL_MEM_FENCE);
-    /* Step 2, lane 0: reduce the verdicts, pick the next node, publish the
-     * leaf to test (its references split by type) if any lane entered it. */
+    /* Step 2, lane 0: reduce the verdicts, pick and publish the next node,
+     * publish the leaf's references to test if any lane entered it. */
     if (lid == 0) {
       uint nIn = 0, nVote = 0, nLive = 0;
       for (uint k = 0; k < nLanes; ++k) {
@@ -179,94 +229,62 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
       CR_GLOBAL const BVHNode* n = nodes + ni;
       uint sp = sState[1];
       uint next = CR_PACKET_END;
-      uint nSph = 0, nTri = 0, nCone = 0;
+      uint nPrims = 0;
       if (nLive > 0) {
         if (nIn > 0 && interior) {
           const uint nearer = 2 * nVote > nIn ? n->first + 1 : n->first;
           sStack[sp++] = nearer == n->first ? n->first + 1 : n->first;
           next = nearer;
         } else {
-          if (nIn > 0) {
-            /* References are sorted, so grouped by type (types.h). */
-            for (uint i = n->first; i < n->first + n->count; ++i) {
-              const uint g = refs[i];
-              if (g < pv->nSpheres)
-                ++nSph;
-              else if (g < pv->nSpheres + pv->nTriangles)
-                ++nTri;
-              else
-                ++nCone;
-            }
-          }
+          if (nIn > 0) nPrims = n->count;
           if (sp > 0) next = sStack[--sp];
         }
       }
       sState[0] = next;
       sState[1] = sp;
+      if (next != CR_PACKET_END) BVHPacket_PublishNode(nodes, next, sNode);
       sState[2] = n->first;
-      sState[3] = nSph;
-      sState[4] = nTri;
-      sState[5] = nCone;
+      sState[3] = nPrims;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
-    /* Step 3, every lane, once per primitive of the leaf, type by type. */
-    uint i = sState[2];
+    /* Step 3, once per primitive of the leaf (one barrier each). */
     const int want = in & live;
+    for (uint k = 0; k < sState[3]; ++k) {
+      {
+        const uint g = refs[sState[2] + k];
+        Ray ray;
+        Hit hit;
+        BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
+        BVHPacket_LoadHit(sHit, sHitG, lid, nLanes, &hit);
+        real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
+        int found = 0;
 #if CR_HAS_SPHERES
-    for (uint end = i + sState[3]; i < end; ++i) {
-      const uint g = refs[i];
-      Ray ray;
-      Hit hit;
-      BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      BVHPacket_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-      real t = (real)0.0f;
-      const int found = Sphere_Intersect(&ray, pv->spheres + g, ray.tmin, hit.t, &t);
-      const int took = BVHPacket_Commit(&hit, want & found, t, (real)0.0f, (real)0.0f, g);
-      BVHPacket_StoreHit(sHit, sHitG, lid, nLanes, &hit);
-#ifdef CR_STATS
-      st->nIT += (uint)want;
-#endif
-      live = live & !(took & anyHit);
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
+        if (g < pv->nSpheres) {
+          const Sphere prim = pv->spheres[g];
+          found = Sphere_Intersect(&ray, &prim, ray.tmin, hit.t, &t);
+        }
 #endif
 #if CR_HAS_TRIANGLES
-    for (uint end = i + sState[4]; i < end; ++i) {
-      const uint g = refs[i];
-      Ray ray;
-      Hit hit;
-      BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      BVHPacket_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-      real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
-      const int found = Triangle_Intersect(&ray, pv->triangles + (g - pv->nSpheres), ray.tmin, hit.t, &t, &u, &v);
-      const int took = BVHPacket_Commit(&hit, want & found, t, u, v, g);
-      BVHPacket_StoreHit(sHit, sHitG, lid, nLanes, &hit);
-#ifdef CR_STATS
-      st->nIT += (uint)want;
-#endif
-      live = live & !(took & anyHit);
-      barrier(CLK_LOCAL_MEM_FENCE);
-    }
+        if (g >= pv->nSpheres && g < pv->nSpheres + pv->nTriangles) {
+          const Triangle prim = pv->triangles[g - pv->nSpheres];
+          found = Triangle_Intersect(&ray, &prim, ray.tmin, hit.t, &t, &u, &v);
+        }
 #endif
 #if CR_HAS_CONES
-    for (uint end = i + sState[5]; i < end; ++i) {
-      const uint g = refs[i];
-      Ray ray;
-      Hit hit;
-      BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      BVHPacket_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-      real t = (real)0.0f;
-      const int found =
-          Cone_Intersect(&ray, pv->cones + (g - pv->nSpheres - pv->nTriangles), ray.tmin, hit.t, &t);
-      const int took = BVHPacket_Commit(&hit, want & found, t, (real)0.0f, (real)0.0f, g);
-      BVHPacket_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+        if (g >= pv->nSpheres + pv->nTriangles) {
+          const Cone prim = pv->cones[g - pv->nSpheres - pv->nTriangles];
+          found = Cone_Intersect(&ray, &prim, ray.tmin, hit.t, &t);
+        }
+#endif
+        const int took = BVHPacket_Commit(&hit, want & found, t, u, v, g);
+        BVHPacket_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+        live = live & !(took & anyHit);
+      }
 #ifdef CR_STATS
       st->nIT += (uint)want;
 #endif
-      live = live & !(took & anyHit);
       barrier(CLK_LOCAL_MEM_FENCE);
     }
-#endif
   }
 }
 

@@ -46,8 +46,12 @@ CR_FUNC void Quadratic_Roots(real a, real bh, real c, real disc, real* t0, real*
   *t1 = fmax(r0, r1);
 }
 
+/* The typed tests take the primitive in private memory (a copy), so that a
+ * caller may hold it anywhere: global memory (Prim_Intersect), or local
+ * memory shared by a work-group (kernels/bvh_packet.cl). */
+
 /* Sphere: nearest root in [tmin, tmax]. */
-CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin, real tmax, real* tHit)
+CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax, real* tHit)
 {
   real f[3];
   CR_UNROLL for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
@@ -86,7 +90,7 @@ CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin,
 }
 
 /* Triangle: t and barycentrics (u weights v1, v weights v2). */
-CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real tmin, real tmax, real* tHit,
+CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, real tmax, real* tHit,
                                real* uHit, real* vHit)
 {
 #ifdef CR_FAST
@@ -152,7 +156,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
 
 /* Open cone or cylinder (NFF `c`): the quadric |radial|^2 = r(s)^2 with
  * r(s) = r0 + (r1 - r0) s / H, kept for axial s in [0, H]. */
-CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, real tmax, real* tHit)
+CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, real* tHit)
 {
   real w[3], dl[3];
   CR_UNROLL for (int i = 0; i < 3; ++i) {
@@ -227,17 +231,20 @@ CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
   int found = 0;
 #if CR_HAS_SPHERES
   if (g < pv->nSpheres) {
-    found = Sphere_Intersect(r, pv->spheres + g, r->tmin, hit->t, &t);
+    const Sphere s = pv->spheres[g];
+    found = Sphere_Intersect(r, &s, r->tmin, hit->t, &t);
   } else
 #endif
 #if CR_HAS_TRIANGLES
       if (g < pv->nSpheres + pv->nTriangles) {
-    found = Triangle_Intersect(r, pv->triangles + (g - pv->nSpheres), r->tmin, hit->t, &t, &u, &v);
+    const Triangle tri = pv->triangles[g - pv->nSpheres];
+    found = Triangle_Intersect(r, &tri, r->tmin, hit->t, &t, &u, &v);
   } else
 #endif
   {
 #if CR_HAS_CONES
-    found = Cone_Intersect(r, pv->cones + (g - pv->nSpheres - pv->nTriangles), r->tmin, hit->t, &t);
+    const Cone cn = pv->cones[g - pv->nSpheres - pv->nTriangles];
+    found = Cone_Intersect(r, &cn, r->tmin, hit->t, &t);
 #endif
   }
   if (found && Hit_Closer(t, g, hit)) {

@@ -232,18 +232,19 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 #define CR_PACKET_LOCALS                                      \
   __local uint sStack[CR_BVH_STACK];                          \
   __local uint sLane[CR_PACKET_SIZE];                         \
-  __local uint sState[6];                                     \
+  __local uint sState[4];                                     \
+  __local float sNode[CR_PACKET_NODE_FIELDS];                 \
   __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE];   \
   __local uint sAxes[CR_PACKET_SIZE];                         \
   __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE];   \
   __local uint sHitG[CR_PACKET_SIZE]
-#define CR_PACKET_LOCAL_ARGS sStack, sLane, sState, sRay, sAxes, sHit, sHitG
+#define CR_PACKET_LOCAL_ARGS sStack, sLane, sState, sNode, sRay, sAxes, sHit, sHitG
 
 /* The hit of one lane's ray after the group's packet traversal. */
 CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
                          const RayRecord* rec, int live, uint lid, int anyHit, TraceStats* st,
                          __local uint* sStack, __local uint* sLane, __local uint* sState,
-                         __local real* sRay, __local uint* sAxes, __local real* sHit,
+                         __local float* sNode, __local real* sRay, __local uint* sAxes, __local real* sHit,
                          __local uint* sHitG)
 {
   Ray ray;
