@@ -46,11 +46,15 @@ CR_FUNC void Quadratic_Roots(real a, real bh, real c, real disc, real* t0, real*
   *t1 = fmax(r0, r1);
 }
 
+/* The typed tests take the primitive in private memory (a copy), so that a
+ * caller may hold it anywhere: global memory (Prim_Intersect), or local
+ * memory shared by a work-group (kernels/bvh_packet.cl). */
+
 /* Sphere: nearest root in [tmin, tmax]. */
-CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin, real tmax, real* tHit)
+CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax, real* tHit)
 {
   real f[3];
-  for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
+  CR_UNROLL for (int i = 0; i < 3; ++i) f[i] = r->org[i] - (real)s->center[i];
   real rad = (real)s->radius;
   real a = Dot3(r->dir, r->dir);
   real bh = Dot3(f, r->dir);
@@ -86,13 +90,13 @@ CR_FUNC int Sphere_Intersect(const Ray* r, CR_GLOBAL const Sphere* s, real tmin,
 }
 
 /* Triangle: t and barycentrics (u weights v1, v weights v2). */
-CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real tmin, real tmax, real* tHit,
+CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, real tmax, real* tHit,
                                real* uHit, real* vHit)
 {
 #ifdef CR_FAST
   /* Moller & Trumbore 1997, fixed epsilon on the determinant. */
   real e1[3], e2[3], pv[3], tv[3], qv[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     e1[i] = (real)tri->v1[i] - (real)tri->v0[i];
     e2[i] = (real)tri->v2[i] - (real)tri->v0[i];
     tv[i] = r->org[i] - (real)tri->v0[i];
@@ -123,7 +127,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
    * shared edge or vertex. */
   const int kx = r->kx, ky = r->ky, kz = r->kz;
   real A[3], B[3], C[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     A[i] = (real)tri->v0[i] - r->org[i];
     B[i] = (real)tri->v1[i] - r->org[i];
     C[i] = (real)tri->v2[i] - r->org[i];
@@ -152,22 +156,22 @@ CR_FUNC int Triangle_Intersect(const Ray* r, CR_GLOBAL const Triangle* tri, real
 
 /* Open cone or cylinder (NFF `c`): the quadric |radial|^2 = r(s)^2 with
  * r(s) = r0 + (r1 - r0) s / H, kept for axial s in [0, H]. */
-CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, real tmax, real* tHit)
+CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, real* tHit)
 {
   real w[3], dl[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     w[i] = (real)cn->apex[i] - (real)cn->base[i];
     dl[i] = r->org[i] - (real)cn->base[i];
   }
   const real H = sqrt(Dot3(w, w));
   if (!(H > (real)0.0f)) return 0;
-  for (int i = 0; i < 3; ++i) w[i] = w[i] / H;
+  CR_UNROLL for (int i = 0; i < 3; ++i) w[i] = w[i] / H;
   const real r0 = (real)cn->baseRadius;
   const real k = ((real)cn->apexRadius - r0) / H;
   const real ds = Dot3(r->dir, w);
   const real os = Dot3(dl, w);
   real dR[3], oR[3];
-  for (int i = 0; i < 3; ++i) {
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
     dR[i] = r->dir[i] - ds * w[i];
     oR[i] = dl[i] - os * w[i];
   }
@@ -193,7 +197,7 @@ CR_FUNC int Cone_Intersect(const Ray* r, CR_GLOBAL const Cone* cn, real tmin, re
      * the same cure as for spheres, no cancellation between two large
      * squares when the cone is thin and far away. */
     real e[3], x[3];
-    for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
+    CR_UNROLL for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
     x[0] = oR[1] * dR[2] - oR[2] * dR[1];
     x[1] = oR[2] * dR[0] - oR[0] * dR[2];
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
@@ -227,17 +231,20 @@ CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
   int found = 0;
 #if CR_HAS_SPHERES
   if (g < pv->nSpheres) {
-    found = Sphere_Intersect(r, pv->spheres + g, r->tmin, hit->t, &t);
+    const Sphere s = pv->spheres[g];
+    found = Sphere_Intersect(r, &s, r->tmin, hit->t, &t);
   } else
 #endif
 #if CR_HAS_TRIANGLES
       if (g < pv->nSpheres + pv->nTriangles) {
-    found = Triangle_Intersect(r, pv->triangles + (g - pv->nSpheres), r->tmin, hit->t, &t, &u, &v);
+    const Triangle tri = pv->triangles[g - pv->nSpheres];
+    found = Triangle_Intersect(r, &tri, r->tmin, hit->t, &t, &u, &v);
   } else
 #endif
   {
 #if CR_HAS_CONES
-    found = Cone_Intersect(r, pv->cones + (g - pv->nSpheres - pv->nTriangles), r->tmin, hit->t, &t);
+    const Cone cn = pv->cones[g - pv->nSpheres - pv->nTriangles];
+    found = Cone_Intersect(r, &cn, r->tmin, hit->t, &t);
 #endif
   }
   if (found && Hit_Closer(t, g, hit)) {
@@ -260,7 +267,7 @@ CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bm
   real tn = tmin, tf = tmax;
   real boxFar = (real)CR_INF;
   real boxNear = -(real)CR_INF;
-  for (int a = 0; a < 3; ++a) {
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
     real lo = ((real)bmin[a] - r->org[a]) * r->inv[a];
     real hi = ((real)bmax[a] - r->org[a]) * r->inv[a];
     real n = r->inv[a] < (real)0.0f ? hi : lo;

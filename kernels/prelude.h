@@ -66,6 +66,16 @@ inline uint cr_minu(uint a, uint b) { return a < b ? a : b; }
 }  // namespace cr
 #endif
 
+/* Before a loop of fixed small trip count (the three axes): unrolled in
+ * OpenCL, where PoCL compiles with -unroll-threshold=1, so that a rolled
+ * loop would stay a loop inside the work-item loop and keep PoCL from
+ * vectorising it. C++ compilers unroll such loops by themselves. */
+#ifdef CR_OPENCL
+#define CR_UNROLL _Pragma("unroll")
+#else
+#define CR_UNROLL
+#endif
+
 #ifdef CR_OPENCL
 #define cr_min(a, b) min((int)(a), (int)(b))
 #define cr_max(a, b) max((int)(a), (int)(b))

@@ -49,7 +49,7 @@ CR_FUNC real Dot3(const real a[3], const real b[3]) { return a[0] * b[0] + a[1] 
 
 CR_FUNC void Ray_Init(Ray* r, const RayRecord* rec)
 {
-  for (int a = 0; a < 3; ++a) {
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
     r->org[a] = (real)rec->org[a];
     r->dir[a] = (real)rec->dir[a];
     r->inv[a] = (real)1.0f / r->dir[a];

@@ -1,35 +1,38 @@
 #include "cl/cl_info.h"
 
-#define CL_HPP_TARGET_OPENCL_VERSION 120
-#define CL_HPP_MINIMUM_OPENCL_VERSION 120
-#include <CL/opencl.hpp>
+#include "cl/cl_device.h"
 
 namespace cr {
 
 nlohmann::json OpenCLInventory()
 {
   nlohmann::json out = nlohmann::json::array();
-  std::vector<cl::Platform> platforms;
-  if (cl::Platform::get(&platforms) != CL_SUCCESS) return out;
-  for (const auto& p : platforms) {
-    nlohmann::json jp;
-    jp["name"] = p.getInfo<CL_PLATFORM_NAME>();
-    jp["version"] = p.getInfo<CL_PLATFORM_VERSION>();
-    jp["devices"] = nlohmann::json::array();
-    std::vector<cl::Device> devices;
-    if (p.getDevices(CL_DEVICE_TYPE_ALL, &devices) == CL_SUCCESS) {
-      for (const auto& d : devices) {
-        cl_device_type type = d.getInfo<CL_DEVICE_TYPE>();
-        jp["devices"].push_back({{"name", d.getInfo<CL_DEVICE_NAME>()},
-                                 {"type", (type & CL_DEVICE_TYPE_GPU) ? "gpu" : (type & CL_DEVICE_TYPE_CPU) ? "cpu" : "other"},
-                                 {"version", d.getInfo<CL_DEVICE_VERSION>()},
-                                 {"driver", d.getInfo<CL_DRIVER_VERSION>()},
-                                 {"compute_units", d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>()},
-                                 {"global_mem_bytes", d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>()},
-                                 {"max_alloc_bytes", d.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>()}});
-      }
-    }
-    out.push_back(jp);
+  std::vector<ClDevice> devices;
+  try {
+    devices = ListClDevices();
+  } catch (const std::exception&) {
+    return out;  // no platform (or an unusable one): nothing to list
+  }
+  // Platforms without a device are not listed.
+  for (const auto& d : devices) {
+    if (out.empty() || out.back()["index"] != d.platformIndex)
+      out.push_back({{"index", d.platformIndex},
+                     {"name", d.platformName},
+                     {"version", d.platformVersion},
+                     {"devices", nlohmann::json::array()}});
+    out.back()["devices"].push_back({{"device", std::to_string(d.flatIndex)},
+                                     {"platform:device", std::to_string(d.platformIndex) + ":" +
+                                                             std::to_string(d.deviceIndex)},
+                                     {"name", d.name},
+                                     {"type", d.type},
+                                     {"version", d.version},
+                                     {"driver", d.driverVersion},
+                                     {"compute_units", d.computeUnits},
+                                     {"global_mem_bytes", d.globalMemBytes},
+                                     {"max_alloc_bytes", d.maxAllocBytes},
+                                     {"local_mem_bytes", d.localMemBytes},
+                                     {"max_work_group_size", d.maxWorkGroupSize},
+                                     {"fp64", d.fp64}});
   }
   return out;
 }

@@ -15,6 +15,7 @@
 #include "rays/raygen.h"
 #include "reference/check.h"
 #include "reference/reference.h"
+#include "scene/camera.h"
 
 namespace cr::cli {
 
@@ -74,7 +75,7 @@ Run RegisterRays(CLI::App& app)
 Run RegisterTrace(CLI::App& app)
 {
   struct O {
-    std::string scene, rays, out;
+    std::string scene, rays, out, primary;
     bool occlusion = false, stats = false;
     int repeat = 1;
     TracerOptions t;
@@ -82,7 +83,11 @@ Run RegisterTrace(CLI::App& app)
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("trace", "Trace a ray set; print one JSON line; optionally write .hits");
   cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
-  cmd->add_option("--rays", o->rays, "Input .rays file")->required();
+  auto* raysOpt = cmd->add_option("--rays", o->rays, "Input .rays file");
+  cmd->add_option("--primary", o->primary,
+                  "Trace the camera's primary rays of a WxH image instead of a .rays file (generated on the device "
+                  "by backends that can)")
+      ->excludes(raysOpt);
   cmd->add_flag("--occlusion", o->occlusion, "Any-hit (shadow) query instead of closest hit");
   cmd->add_option("--repeat", o->repeat, "Timed repetitions; trace_ms is their median")->check(CLI::Range(1, 1000));
   cmd->add_flag("--stats", o->stats, "Add Havran's per-ray and per-structure measures");
@@ -92,16 +97,29 @@ Run RegisterTrace(CLI::App& app)
     TraceConfig cfg = o->t.ToConfig();
     cfg.stats = o->stats;
     auto limit = LimitThreads(cfg.threads);
+    if (o->rays.empty() && o->primary.empty()) throw InputError("trace: give --rays FILE or --primary WxH");
+    if (!o->primary.empty() && o->occlusion) throw InputError("--primary traces closest hits; drop --occlusion");
     Scene scene = LoadScene(o->scene);
-    std::vector<RayRecord> rays = ReadRays(o->rays);
+    int width = 0, height = 0;
+    std::vector<RayRecord> rays;
+    if (o->primary.empty())
+      rays = ReadRays(o->rays);
+    else
+      ParseSize(o->primary, width, height);
+    const std::size_t nRays = o->primary.empty() ? rays.size() : std::size_t(width) * std::size_t(height);
+    const CameraFrame frame = MakeCameraFrame(scene.camera, width, height);
     auto tracer = CreateTracer(scene, cfg);
+    tracer->Prepare(o->occlusion, !o->primary.empty());
     std::vector<HitRecord> hits;
     std::vector<double> times;
     TraceStatsSum stats;
     for (int r = 0; r < o->repeat; ++r) {
       TraceStatsSum* sp = (r == 0 && o->stats) ? &stats : nullptr;
       auto t0 = std::chrono::steady_clock::now();
-      tracer->Trace(rays, hits, o->occlusion, sp);
+      if (o->primary.empty())
+        tracer->Trace(rays, hits, o->occlusion, sp);
+      else
+        tracer->TracePrimary(frame, width, height, hits, sp);
       times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     }
     std::sort(times.begin(), times.end());
@@ -109,6 +127,7 @@ Run RegisterTrace(CLI::App& app)
     if (!o->out.empty()) WriteHits(o->out, hits);
     nlohmann::json j;
     j["scene"] = o->scene;
+    if (!o->primary.empty()) j["primary"] = o->primary;
     j["accel"] = cfg.backend == Backend::Reference ? "reference-bvh" : AccelKindName(cfg.accel);
     j["backend"] = BackendName(cfg.backend);
     j["precision"] = PrecisionName(cfg.precision);
@@ -116,18 +135,19 @@ Run RegisterTrace(CLI::App& app)
     j["device"] = tracer->DeviceName();
     j["threads"] = cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency();
     j["query"] = o->occlusion ? "occlusion" : "closest";
-    j["rays"] = rays.size();
+    j["rays"] = nRays;
     j["build_ms"] = tracer->Info().buildMs;
     j["trace_ms"] = median;
     j["trace_ms_min"] = times.front();
     j["trace_ms_max"] = times.back();
     j["repeat"] = o->repeat;
-    j["mrays_per_s"] = median > 0.0 ? double(rays.size()) / (median * 1e3) : 0.0;
+    j["mrays_per_s"] = median > 0.0 ? double(nRays) / (median * 1e3) : 0.0;
     std::uint64_t nHit = 0;
     for (const auto& h : hits) nHit += h.prim != CR_NO_HIT;
     j["hits"] = nHit;
+    tracer->Describe(j);
     if (o->stats) {
-      const double n = rays.empty() ? 1.0 : double(rays.size());
+      const double n = nRays == 0 ? 1.0 : double(nRays);
       j["per_ray"] = {{"intersection_tests", double(stats.nIT) / n},
                       {"traversal_steps", double(stats.nTS) / n},
                       {"leaves_visited", double(stats.nLeaves) / n},

@@ -7,8 +7,4 @@ std::unique_ptr<Tracer> CreateSimdTracer(const Scene&, const TraceConfig&)
 {
   throw RuntimeError("--backend simd: not implemented yet");
 }
-std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene&, const TraceConfig&)
-{
-  throw RuntimeError("--backend opencl: not implemented yet");
-}
 }  // namespace cr

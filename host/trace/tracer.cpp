@@ -49,6 +49,19 @@ const char* PrecisionName(Precision p)
   return "?";
 }
 
+void Tracer::TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
+                          TraceStatsSum* stats)
+{
+  CameraFrame f = frame;
+  f.width = width;
+  f.height = height;
+  std::vector<RayRecord> rays(std::size_t(width) * std::size_t(height));
+  tbb::parallel_for(0, height, [&](int y) {
+    for (int x = 0; x < width; ++x) rays[std::size_t(y) * std::size_t(width) + std::size_t(x)] = PrimaryRay(f, x, y);
+  });
+  Trace(rays, hits, false, stats);
+}
+
 namespace {
 
 // The fp64 reference as a backend (its own BVH; the accel choice is ignored).

@@ -8,8 +8,11 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "accel/accel.h"
 #include "kernels/types.h"
+#include "scene/camera.h"
 #include "scene/scene.h"
 
 namespace cr {
@@ -61,6 +64,22 @@ class Tracer {
   // is filled only when the tracer was created with stats on.
   virtual void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
                      TraceStatsSum* stats) = 0;
+  // Closest hits of the camera's primary rays through the pixel centres of a
+  // width x height image (scene/camera.h PrimaryRay), row-major from the
+  // top-left. The default generates the rays on the host and calls Trace; a
+  // device backend generates them where it traces.
+  virtual void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
+                            TraceStatsSum* stats);
+  // Does the one-time work a query kind needs (compiling kernels) so that
+  // timed Trace (primary: TracePrimary) calls measure tracing only. They
+  // do it themselves when it was not done.
+  virtual void Prepare(bool occlusion, bool primary = false)
+  {
+    (void)occlusion;
+    (void)primary;
+  }
+  // Backend-specific fields for the trace JSON (e.g. program_build_ms).
+  virtual void Describe(nlohmann::json& j) const { (void)j; }
   virtual std::string DeviceName() const = 0;
   // What actually ran (e.g. "avx2 packet"), for the JSON output.
   virtual std::string VariantName() const { return ""; }

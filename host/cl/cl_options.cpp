@@ -1,0 +1,88 @@
+#include "cl/cl_options.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace cr {
+
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic)
+{
+  std::string v = s;
+  generic = false;
+  const std::string suffix = "-generic";
+  if (v.size() >= suffix.size() && v.compare(v.size() - suffix.size(), suffix.size(), suffix) == 0) {
+    generic = true;
+    v.resize(v.size() - suffix.size());
+  }
+  if (v.empty() || v == "ray") {
+    variant = ClVariant::Ray;
+    return;
+  }
+  if (v == "packet") {
+    variant = ClVariant::Packet;
+    return;
+  }
+  throw InputError(fmt::format(
+      "--variant '{}': the opencl backend has ray and packet (each also as ray-generic, packet-generic)", s));
+}
+
+const char* ClVariantName(ClVariant v) { return v == ClVariant::Packet ? "packet" : "ray"; }
+
+ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
+                                const ClDevice& dev)
+{
+  ClProgramSpec s;
+  ParseClVariant(config.variant, s.variant, s.generic);
+  if (s.variant == ClVariant::Packet && config.accel != AccelKind::BVH)
+    throw InputError(fmt::format("--variant packet: the opencl backend has packet traversal for bvh only so far "
+                                 "(--accel {} runs --variant ray)",
+                                 AccelKindName(config.accel)));
+  if (config.precision == Precision::Fp64 && !dev.fp64)
+    throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
+  s.accel = config.accel;
+  s.anyHit = occlusion;
+  s.camera = camera;
+  s.unified = config.unifiedHits;
+  s.precision = config.precision;
+  s.stats = config.stats;
+  s.cameraFp64 = dev.fp64;
+  if (!s.generic) {
+    s.spheres = !scene.spheres.empty();
+    s.triangles = !scene.triangles.empty();
+    s.cones = !scene.cones.empty();
+  }
+  // A packet is one work-group: 64 lanes where the device allows it.
+  if (dev.maxWorkGroupSize < 64) {
+    s.packetW = 8;
+    s.packetH = static_cast<int>(dev.maxWorkGroupSize / 8 > 0 ? dev.maxWorkGroupSize / 8 : 1);
+  }
+  return s;
+}
+
+std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
+{
+  std::string o = "-cl-std=CL1.2";
+  if (dev.correctlyRoundedDivideSqrt) o += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (s.precision == Precision::Fast) o += " -DCR_FAST";
+  if (s.precision == Precision::Fp64) o += " -DCR_FP64";
+  if (s.cameraFp64) o += " -DCR_CAMERA_FP64";
+  if (s.stats) o += " -DCR_STATS";
+  o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
+  if (!s.generic) {
+    o += fmt::format(" -DCR_HAS_SPHERES={} -DCR_HAS_TRIANGLES={} -DCR_HAS_CONES={}", int(s.spheres),
+                     int(s.triangles), int(s.cones));
+    switch (s.accel) {
+      case AccelKind::BVH: o += " -DCR_ACCEL_BVH"; break;
+      case AccelKind::Grid: o += " -DCR_ACCEL_GRID"; break;
+      case AccelKind::Octree: o += " -DCR_ACCEL_OCTREE"; break;
+    }
+    o += fmt::format(" -DCR_ANYHIT={} -DCR_UNIFIED={}", int(s.anyHit), int(s.unified));
+    o += s.variant == ClVariant::Packet ? " -DCR_VARIANT_PACKET" : " -DCR_VARIANT_RAY";
+    o += s.camera ? " -DCR_SOURCE_CAMERA" : " -DCR_SOURCE_RAYS";
+  }
+  for (const auto& d : s.defines) o += " -D" + d;
+  return o;
+}
+
+}  // namespace cr

@@ -1,0 +1,51 @@
+// What one OpenCL program models, and the build options that say it
+// (kernels/trace.cl lists them). Model only what a scene and query need: the
+// primitive types present, the one structure, the query kind, the precision,
+// the variant; a generic program (all types, runtime arguments) exists for
+// comparison.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "cl/cl_device.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+enum class ClVariant { Ray, Packet };
+
+struct ClProgramSpec {
+  bool generic = false;          // all primitive types and structures, query by argument
+  bool spheres = true, triangles = true, cones = true;
+  AccelKind accel = AccelKind::BVH;
+  bool anyHit = false;
+  bool unified = false;
+  Precision precision = Precision::Robust;
+  bool stats = false;
+  ClVariant variant = ClVariant::Ray;
+  bool camera = false;           // primary rays generated on the device, else rays from a buffer
+  int packetW = 8, packetH = 8;  // work-group tile of the packet kernels
+  bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's
+  // Hook for the renderer's kernels: extra "NAME=VALUE" definitions (material
+  // count, light count), appended as -D options.
+  std::vector<std::string> defines;
+};
+
+// The spec for tracing `scene` with `config` (query kind `occlusion`) on
+// `dev`. InputError when the device cannot do it (fp64 without cl_khr_fp64,
+// an unknown --variant).
+// `camera`: the program traces primary rays it generates (TracePrimary).
+ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
+                                const ClDevice& dev);
+
+// "-cl-std=CL1.2 -DCR_ACCEL_BVH ...": never fast-math flags; correctly
+// rounded divide and sqrt where the device offers them (the C++ build rounds
+// that way), so that results match the scalar backend bit for bit.
+std::string ClBuildOptions(const ClProgramSpec& spec, const ClDevice& dev);
+
+// Parses --variant: "", "ray", "packet", optionally suffixed "-generic".
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic);
+const char* ClVariantName(ClVariant v);
+
+}  // namespace cr

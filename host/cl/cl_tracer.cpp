@@ -1,0 +1,393 @@
+// The `opencl` backend: the portable kernels compiled by the device's OpenCL
+// compiler (kernels/trace.cl), one program per query kind, specialised to the
+// scene (cl_options.h) and cached on disk (cl_program_cache.h). The scene and
+// the structure are uploaded once; rays per Trace call (or generated on the
+// device for TracePrimary); hits and per-ray counters are read back.
+#include <chrono>
+#include <optional>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cl/cl_context.h"
+#include "cl/cl_options.h"
+#include "cl/cl_program.h"
+#include "core/error.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+namespace {
+
+// Positions of the kernel arguments (kernels/trace.cl CR_SCENE_PARAMS and
+// the kernels' own parameters after them).
+enum SceneArg : cl_uint {
+  kArgSpheres,
+  kArgTriangles,
+  kArgCones,
+  kArgPrimIds,
+  kArgNSpheres,
+  kArgNTriangles,
+  kArgNCones,
+  kArgBvhNodes,
+  kArgBvhRefs,
+  kArgGrid,
+  kArgCellStart,
+  kArgGridRefs,
+  kArgOctree,
+  kArgOctNodes,
+  kArgOctRefs,
+  kArgAccel,
+  kArgAnyHit,
+  kArgUnified,
+  kNumSceneArgs
+};
+enum RaysArg : cl_uint { kArgRays = kNumSceneArgs, kArgNRays, kArgRaysHits, kArgRaysStats };
+enum PrimaryArg : cl_uint {
+  kArgOrg = kNumSceneArgs,
+  kArgForward,
+  kArgRight,
+  kArgUp,
+  kArgTanHalf,
+  kArgTmin,
+  kArgWidth,
+  kArgHeight,
+  kArgPrimaryHits,
+  kArgPrimaryStats
+};
+
+int AccelArg(AccelKind k)
+{
+  switch (k) {
+    case AccelKind::Grid: return 0;
+    case AccelKind::Octree: return 1;
+    case AccelKind::BVH: return 2;
+  }
+  return 2;
+}
+
+template <typename T>
+void SetArg(cl::Kernel& k, cl_uint index, const T& value, const char* kernelName)
+{
+  CR_CL_CHECK_WHAT(k.setArg(index, value), "clSetKernelArg", fmt::format("{} argument {}", kernelName, index));
+}
+
+// kernels/ray.h TraceStats: four uint counters per ray (nIT, nTS, nLeaves,
+// nEmptyLeaves), the layout the kernels write.
+constexpr std::size_t kStatsBytes = 4 * sizeof(std::uint32_t);
+
+std::size_t RoundUp(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+double MsSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+class ClTracer final : public Tracer {
+ public:
+  ClTracer(const Scene& scene, const TraceConfig& cfg)
+      : scene_(scene), config_(cfg), cl_(CreateClContext(cfg.device))
+  {
+    ParseClVariant(cfg.variant, variant_, generic_);
+    // Validate the device and options before the (slow) structure build.
+    (void)MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
+    AccelData data = BuildAccel(scene, cfg.accel, cfg.params);
+    info_ = data.info;
+    Upload(data);
+  }
+
+  void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
+
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    Built& p = Program(occlusion, false);
+    hits.resize(rays.size());
+    if (rays.empty()) return;
+    const std::size_t n = rays.size();
+    if (n > 0xFFFFFFFFu) throw RuntimeError("OpenCL: more than 2^32 - 1 rays in one batch");
+    EnsureRayBuffers(n, true);
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueWriteBuffer(rayBuf_, CL_FALSE, 0, n * sizeof(RayRecord), rays.data()),
+                     "clEnqueueWriteBuffer", "rays");
+    cl::Kernel& k = p.rays;
+    SetArg(k, kArgRays, rayBuf_, p.raysName);
+    SetArg(k, kArgNRays, cl_uint(n), p.raysName);
+    SetArg(k, kArgRaysHits, hitBuf_, p.raysName);
+    SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, p.raysName);
+    const std::size_t local = std::size_t(p.spec.packetW) * std::size_t(p.spec.packetH);
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(RoundUp(n, local)),
+                                                   cl::NDRange(local)),
+                     "clEnqueueNDRangeKernel", p.raysName);
+    ReadBack(n, hits, stats);
+  }
+
+  void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
+                    TraceStatsSum* stats) override
+  {
+    Built& p = Program(false, true);
+    if (width <= 0 || height <= 0) {
+      hits.clear();
+      return;
+    }
+    const std::size_t n = std::size_t(width) * std::size_t(height);
+    hits.resize(n);
+    EnsureRayBuffers(n, false);
+    cl::Kernel& k = p.primary;
+    SetPrimaryArgs(k, p, frame, width, height);
+    SetArg(k, kArgPrimaryHits, hitBuf_, p.primaryName);
+    SetArg(k, kArgPrimaryStats, config_.stats ? statsBuf_ : dummy_, p.primaryName);
+    const std::size_t lw = std::size_t(p.spec.packetW), lh = std::size_t(p.spec.packetH);
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange,
+                                                   cl::NDRange(RoundUp(std::size_t(width), lw),
+                                                               RoundUp(std::size_t(height), lh)),
+                                                   cl::NDRange(lw, lh)),
+                     "clEnqueueNDRangeKernel", p.primaryName);
+    ReadBack(n, hits, stats);
+  }
+
+  std::string DeviceName() const override { return cl_.dev.name; }
+
+  std::string VariantName() const override
+  {
+    return fmt::format("{} {}{}", PrecisionName(config_.precision), ClVariantName(variant_),
+                       generic_ ? " generic" : "");
+  }
+
+  void Describe(nlohmann::json& j) const override
+  {
+    double buildMs = 0.0, jitMs = 0.0;
+    bool allHit = true;
+    std::size_t binaryBytes = 0;
+    std::string note, options;
+    for (const auto& b : built_) {
+      if (!b) continue;
+      buildMs += b->program.buildMs;
+      jitMs += b->jitMs;
+      allHit = allHit && b->program.cacheHit;
+      binaryBytes += b->program.binaryBytes;
+      if (!b->program.cacheHit && note.empty()) note = b->program.cacheNote;
+      options = b->program.options;
+    }
+    j["device_index"] = fmt::format("{}:{}", cl_.dev.platformIndex, cl_.dev.deviceIndex);
+    j["program_build_ms"] = buildMs;
+    j["program_cache"] = allHit ? "hit" : "miss";
+    if (!allHit) j["program_cache_note"] = note;
+    j["program_binary_bytes"] = binaryBytes;
+    j["kernel_first_launch_ms"] = jitMs;
+    j["build_options"] = options;
+  }
+
+ private:
+  // One program and its kernels: Trace_Rays* (rays from a buffer) and/or
+  // Trace_Primary* (camera rays generated on the device).
+  struct Built {
+    ClProgramSpec spec;
+    ClProgram program;
+    cl::Kernel rays, primary;
+    const char* raysName = "";
+    const char* primaryName = "";
+    bool hasRays = false, hasPrimary = false;
+    double jitMs = 0.0;  // first (empty) launches: drivers that compile per work-group size do it here
+  };
+
+  // Programs are specialised to the query kind and the ray source, built on
+  // first use: rays closest, rays occlusion, camera. A generic program
+  // serves all three.
+  Built& Program(bool occlusion, bool camera)
+  {
+    const std::size_t slot = generic_ ? 0 : camera ? 2 : (occlusion ? 1 : 0);
+    if (!built_[slot]) built_[slot] = Build(occlusion, camera);
+    Built& b = *built_[slot];
+    if (b.hasRays) SetArg(b.rays, kArgAnyHit, cl_int(occlusion), b.raysName);
+    if (b.hasPrimary) SetArg(b.primary, kArgAnyHit, cl_int(0), b.primaryName);
+    return b;
+  }
+
+  std::unique_ptr<Built> Build(bool occlusion, bool camera)
+  {
+    auto b = std::make_unique<Built>();
+    b->spec = MakeClProgramSpec(scene_, config_, occlusion, camera, cl_.dev);
+    b->program = BuildClProgram(cl_.context, cl_.dev, ClKernelSource(), ClBuildOptions(b->spec, cl_.dev));
+    const bool packet = b->spec.variant == ClVariant::Packet;
+    b->hasRays = generic_ || !camera;
+    b->hasPrimary = generic_ || camera;
+    b->raysName = packet ? "Trace_RaysPacket" : "Trace_Rays";
+    b->primaryName = packet ? "Trace_PrimaryPacket" : "Trace_Primary";
+    const std::size_t lw = std::size_t(b->spec.packetW), lh = std::size_t(b->spec.packetH);
+    const auto t0 = std::chrono::steady_clock::now();
+    // First launches, empty (no ray, 0x0 image): a driver that compiles each
+    // kernel for its work-group size (PoCL) does it now, not in a timed Trace.
+    if (b->hasRays) {
+      b->rays = MakeKernel(*b, b->raysName);
+      SetArg(b->rays, kArgAnyHit, cl_int(occlusion), b->raysName);
+      SetArg(b->rays, kArgRays, dummy_, b->raysName);
+      SetArg(b->rays, kArgNRays, cl_uint(0), b->raysName);
+      SetArg(b->rays, kArgRaysHits, dummy_, b->raysName);
+      SetArg(b->rays, kArgRaysStats, dummy_, b->raysName);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->rays, cl::NullRange, cl::NDRange(lw * lh),
+                                                     cl::NDRange(lw * lh)),
+                       "clEnqueueNDRangeKernel", b->raysName);
+    }
+    if (b->hasPrimary) {
+      b->primary = MakeKernel(*b, b->primaryName);
+      SetArg(b->primary, kArgAnyHit, cl_int(0), b->primaryName);
+      SetPrimaryArgs(b->primary, *b, MakeCameraFrame(scene_.camera, 1, 1), 0, 0);
+      SetArg(b->primary, kArgPrimaryHits, dummy_, b->primaryName);
+      SetArg(b->primary, kArgPrimaryStats, dummy_, b->primaryName);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->primary, cl::NullRange, cl::NDRange(lw, lh),
+                                                     cl::NDRange(lw, lh)),
+                       "clEnqueueNDRangeKernel", b->primaryName);
+    }
+    CR_CL_CHECK(cl_.queue.finish(), "clFinish");
+    b->jitMs = MsSince(t0);
+    return b;
+  }
+
+  // A kernel of the program with the scene bound, checked against the
+  // device's work-group limit for this kernel.
+  cl::Kernel MakeKernel(const Built& b, const char* name)
+  {
+    cl_int err = CL_SUCCESS;
+    cl::Kernel k(b.program.program, name, &err);
+    CR_CL_CHECK_WHAT(err, "clCreateKernel", name);
+    BindScene(k, name);
+    std::size_t wg = 0;
+    CR_CL_CHECK_WHAT(k.getWorkGroupInfo(cl_.dev.device, CL_KERNEL_WORK_GROUP_SIZE, &wg), "clGetKernelWorkGroupInfo",
+                     name);
+    if (wg < std::size_t(b.spec.packetW) * std::size_t(b.spec.packetH))
+      throw RuntimeError(fmt::format("OpenCL: kernel {} runs at most {} work-items per group on '{}', fewer than "
+                                     "the {}x{} it needs",
+                                     name, wg, cl_.dev.name, b.spec.packetW, b.spec.packetH));
+    return k;
+  }
+
+  void BindScene(cl::Kernel& k, const char* name)
+  {
+    const PrimCounts counts = scene_.Counts();
+    SetArg(k, kArgSpheres, spheres_, name);
+    SetArg(k, kArgTriangles, triangles_, name);
+    SetArg(k, kArgCones, cones_, name);
+    SetArg(k, kArgPrimIds, primIds_, name);
+    SetArg(k, kArgNSpheres, cl_uint(counts.nSpheres), name);
+    SetArg(k, kArgNTriangles, cl_uint(counts.nTriangles), name);
+    SetArg(k, kArgNCones, cl_uint(counts.nCones), name);
+    SetArg(k, kArgBvhNodes, bvhNodes_, name);
+    SetArg(k, kArgBvhRefs, bvhRefs_, name);
+    SetArg(k, kArgGrid, gridHeader_, name);
+    SetArg(k, kArgCellStart, cellStart_, name);
+    SetArg(k, kArgGridRefs, gridRefs_, name);
+    SetArg(k, kArgOctree, octHeader_, name);
+    SetArg(k, kArgOctNodes, octNodes_, name);
+    SetArg(k, kArgOctRefs, octRefs_, name);
+    SetArg(k, kArgAccel, cl_int(AccelArg(config_.accel)), name);
+    SetArg(k, kArgUnified, cl_int(config_.unifiedHits ? 1 : 0), name);
+  }
+
+  void SetPrimaryArgs(cl::Kernel& k, const Built& b, const CameraFrame& f, int width, int height)
+  {
+    const char* name = b.primaryName;
+    cl_float4 org = {{float(f.eye.x), float(f.eye.y), float(f.eye.z), 0.0f}};
+    SetArg(k, kArgOrg, org, name);
+    const glm::dvec3* vecs[3] = {&f.forward, &f.right, &f.up};
+    for (int i = 0; i < 3; ++i) {
+      const glm::dvec3& v = *vecs[i];
+      if (b.spec.cameraFp64) {
+        cl_double4 d = {{v.x, v.y, v.z, 0.0}};
+        SetArg(k, kArgForward + cl_uint(i), d, name);
+      } else {
+        cl_float4 d = {{float(v.x), float(v.y), float(v.z), 0.0f}};
+        SetArg(k, kArgForward + cl_uint(i), d, name);
+      }
+    }
+    if (b.spec.cameraFp64)
+      SetArg(k, kArgTanHalf, cl_double(f.tanHalf), name);
+    else
+      SetArg(k, kArgTanHalf, cl_float(f.tanHalf), name);
+    SetArg(k, kArgTmin, cl_float(f.hither), name);
+    SetArg(k, kArgWidth, cl_int(width), name);
+    SetArg(k, kArgHeight, cl_int(height), name);
+  }
+
+  void Upload(const AccelData& d)
+  {
+    dummy_ = ClUpload(cl_, "placeholder", nullptr, 0);
+    const std::vector<std::uint32_t> ids = scene_.UnifiedIds();
+    spheres_ = ClUpload(cl_, "spheres", scene_.spheres.data(), scene_.spheres.size() * sizeof(Sphere));
+    triangles_ = ClUpload(cl_, "triangles", scene_.triangles.data(), scene_.triangles.size() * sizeof(Triangle));
+    cones_ = ClUpload(cl_, "cones", scene_.cones.data(), scene_.cones.size() * sizeof(Cone));
+    primIds_ = ClUpload(cl_, "primitive ids", ids.data(), ids.size() * sizeof(std::uint32_t));
+    bvhNodes_ = bvhRefs_ = gridHeader_ = cellStart_ = gridRefs_ = octHeader_ = octNodes_ = octRefs_ = dummy_;
+    switch (d.kind) {
+      case AccelKind::BVH:
+        bvhNodes_ = ClUpload(cl_, "bvh nodes", d.bvh.nodes.data(), d.bvh.nodes.size() * sizeof(BVHNode));
+        bvhRefs_ = ClUpload(cl_, "bvh references", d.bvh.refs.data(), d.bvh.refs.size() * sizeof(std::uint32_t));
+        break;
+      case AccelKind::Grid:
+        gridHeader_ = ClUpload(cl_, "grid header", &d.grid.header, sizeof(GridHeader));
+        cellStart_ = ClUpload(cl_, "grid cell offsets", d.grid.cellStart.data(),
+                              d.grid.cellStart.size() * sizeof(std::uint32_t));
+        gridRefs_ = ClUpload(cl_, "grid references", d.grid.refs.data(), d.grid.refs.size() * sizeof(std::uint32_t));
+        break;
+      case AccelKind::Octree:
+        octHeader_ = ClUpload(cl_, "octree header", &d.octree.header, sizeof(OctreeHeader));
+        octNodes_ = ClUpload(cl_, "octree nodes", d.octree.nodes.data(), d.octree.nodes.size() * sizeof(OctreeNode));
+        octRefs_ = ClUpload(cl_, "octree references", d.octree.refs.data(),
+                            d.octree.refs.size() * sizeof(std::uint32_t));
+        break;
+    }
+  }
+
+  // Ray, hit and counter buffers for n rays (grown, never shrunk).
+  void EnsureRayBuffers(std::size_t n, bool withRays)
+  {
+    if (withRays && n > rayCapacity_) {
+      rayBuf_ = ClAlloc(cl_, "rays", n * sizeof(RayRecord), CL_MEM_READ_ONLY);
+      rayCapacity_ = n;
+    }
+    if (n > hitCapacity_) {
+      hitBuf_ = ClAlloc(cl_, "hits", n * sizeof(HitRecord), CL_MEM_WRITE_ONLY);
+      if (config_.stats) statsBuf_ = ClAlloc(cl_, "per-ray counters", n * kStatsBytes, CL_MEM_WRITE_ONLY);
+      hitCapacity_ = n;
+    }
+  }
+
+  void ReadBack(std::size_t n, std::vector<HitRecord>& hits, TraceStatsSum* stats)
+  {
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(hitBuf_, CL_TRUE, 0, n * sizeof(HitRecord), hits.data()),
+                     "clEnqueueReadBuffer", "hits");
+    if (config_.stats && stats) {
+      std::vector<std::uint32_t> per(4 * n);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(statsBuf_, CL_TRUE, 0, n * kStatsBytes, per.data()),
+                       "clEnqueueReadBuffer", "per-ray counters");
+      TraceStatsSum s;
+      s.rays = n;
+      for (std::size_t i = 0; i < n; ++i) {
+        s.nIT += per[4 * i];
+        s.nTS += per[4 * i + 1];
+        s.nLeaves += per[4 * i + 2];
+        s.nEmptyLeaves += per[4 * i + 3];
+      }
+      stats->Add(s);
+    }
+  }
+
+  const Scene& scene_;
+  TraceConfig config_;
+  ClContext cl_;
+  ClVariant variant_ = ClVariant::Ray;
+  bool generic_ = false;
+  std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
+  cl::Buffer dummy_, spheres_, triangles_, cones_, primIds_;
+  cl::Buffer bvhNodes_, bvhRefs_, gridHeader_, cellStart_, gridRefs_, octHeader_, octNodes_, octRefs_;
+  cl::Buffer rayBuf_, hitBuf_, statsBuf_;
+  std::size_t rayCapacity_ = 0, hitCapacity_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config)
+{
+  return std::make_unique<ClTracer>(scene, config);
+}
+
+}  // namespace cr

@@ -1,0 +1,309 @@
+/* The OpenCL program: kernel entry points over the portable traversals. The
+ * host (host/cl/cl_options.cpp) compiles it with options derived from the
+ * scene and the query, so that only what they need is modelled:
+ *   CR_FP64 | CR_FAST                 precision (intersect.h); default robust
+ *   CR_HAS_SPHERES, CR_HAS_TRIANGLES, CR_HAS_CONES = 0|1
+ *                                     primitive types present (default 1)
+ *   CR_ACCEL_BVH | CR_ACCEL_GRID | CR_ACCEL_OCTREE
+ *                                     the one traversal compiled; none: all
+ *                                     three, chosen by the `accel` argument
+ *   CR_ANYHIT = 0|1                   occlusion query; absent: argument
+ *   CR_UNIFIED = 0|1                  unified hit records; absent: argument
+ *   CR_STATS                          per-ray counters written to `stats`
+ *   CR_VARIANT_RAY, CR_VARIANT_PACKET the kernels compiled (absent: both)
+ *   CR_SOURCE_RAYS, CR_SOURCE_CAMERA  rays from a buffer or generated here
+ *                                     (absent: both)
+ *   CR_PACKET_W, CR_PACKET_H          work-group tile of the packet kernels
+ *   CR_CAMERA_FP64                    primary rays generated in double, as
+ *                                     host/scene/camera.cpp does (bit-equal)
+ *   CR_MATERIALS, CR_LIGHTS           reserved for the renderer's kernels
+ * Every kernel takes the same scene and structure arguments (CR_SCENE_PARAMS)
+ * so that the host binds them once per program. */
+#include "prelude.h"
+
+#ifdef CR_FP64
+typedef double real;
+#else
+typedef float real;
+#endif
+
+#ifdef CR_CAMERA_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double camreal;
+typedef double4 camreal4;
+#else
+typedef float camreal;
+typedef float4 camreal4;
+#endif
+
+#ifndef CR_PACKET_W
+#define CR_PACKET_W 8
+#endif
+#ifndef CR_PACKET_H
+#define CR_PACKET_H 8
+#endif
+#define CR_PACKET_SIZE (CR_PACKET_W * CR_PACKET_H)
+
+#if defined(CR_ACCEL_BVH) || !(defined(CR_ACCEL_GRID) || defined(CR_ACCEL_OCTREE))
+#define CR_WITH_BVH 1
+#include "bvh.h"
+#endif
+#if defined(CR_ACCEL_GRID) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_OCTREE))
+#include "grid.h"
+#endif
+#if defined(CR_ACCEL_OCTREE) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_GRID))
+#include "octree.h"
+#endif
+#if defined(CR_WITH_BVH) && !defined(CR_VARIANT_RAY)
+#include "bvh_packet.cl"
+#endif
+
+/* Argument values of the `accel` parameter (generic build). */
+#define CR_ACCEL_ARG_GRID 0
+#define CR_ACCEL_ARG_OCTREE 1
+#define CR_ACCEL_ARG_BVH 2
+
+/* The scene and structure arguments of every kernel, in binding order
+ * (host/cl/cl_tracer.cpp binds them by these positions, 0..17). */
+#define CR_SCENE_PARAMS                                                                                         \
+  CR_GLOBAL const Sphere *spheres, CR_GLOBAL const Triangle *triangles, CR_GLOBAL const Cone *cones,             \
+      CR_GLOBAL const uint *primIds, uint nSpheres, uint nTriangles, uint nCones,                                \
+      CR_GLOBAL const BVHNode *bvhNodes, CR_GLOBAL const uint *bvhRefs, CR_GLOBAL const GridHeader *grid,        \
+      CR_GLOBAL const uint *cellStart, CR_GLOBAL const uint *gridRefs, CR_GLOBAL const OctreeHeader *octree,     \
+      CR_GLOBAL const OctreeNode *octNodes, CR_GLOBAL const uint *octRefs, int accel, int anyHitArg, int unifiedArg
+
+#ifdef CR_ANYHIT
+#define CR_QUERY_ANYHIT CR_ANYHIT
+#else
+#define CR_QUERY_ANYHIT anyHitArg
+#endif
+#ifdef CR_UNIFIED
+#define CR_QUERY_UNIFIED CR_UNIFIED
+#else
+#define CR_QUERY_UNIFIED unifiedArg
+#endif
+
+CR_FUNC PrimView Trace_PrimView(CR_GLOBAL const Sphere* spheres, CR_GLOBAL const Triangle* triangles,
+                                CR_GLOBAL const Cone* cones, uint nSpheres, uint nTriangles, uint nCones)
+{
+  PrimView pv;
+  pv.spheres = spheres;
+  pv.triangles = triangles;
+  pv.cones = cones;
+  pv.nSpheres = nSpheres;
+  pv.nTriangles = nTriangles;
+  pv.nCones = nCones;
+  return pv;
+}
+
+/* Primary ray through pixel (px, py) of a width x height image, with the
+ * formula and operation order of host/scene/camera.cpp PrimaryRay (in double
+ * under CR_CAMERA_FP64, so that both produce the same float ray). */
+CR_FUNC RayRecord Camera_Ray(float4 org, camreal4 fwd, camreal4 right, camreal4 up, camreal tanHalf, float tmin,
+                             int px, int py, int width, int height)
+{
+  const camreal span = height > 1 ? (camreal)(height - 1) : (camreal)1;
+  const camreal x = ((camreal)2 * (camreal)px - (camreal)(width - 1)) / span * tanHalf;
+  const camreal y = ((camreal)(height - 1) - (camreal)2 * (camreal)py) / span * tanHalf;
+  RayRecord r;
+  r.org[0] = org.x;
+  r.org[1] = org.y;
+  r.org[2] = org.z;
+  r.dir[0] = (float)(fwd.x + x * right.x + y * up.x);
+  r.dir[1] = (float)(fwd.y + x * right.y + y * up.y);
+  r.dir[2] = (float)(fwd.z + x * right.z + y * up.z);
+  r.tmin = tmin;
+  r.tmax = CR_INF;
+  return r;
+}
+
+/* Field by field: a struct copy becomes a memcpy call, which the work-item
+ * loop vectoriser cannot widen. */
+CR_FUNC RayRecord Trace_LoadRay(CR_GLOBAL const RayRecord* rays, uint i)
+{
+  CR_GLOBAL const RayRecord* p = rays + i;
+  RayRecord r;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    r.org[a] = p->org[a];
+    r.dir[a] = p->dir[a];
+  }
+  r.tmin = p->tmin;
+  r.tmax = p->tmax;
+  return r;
+}
+
+CR_FUNC void Trace_StoreHit(CR_GLOBAL HitRecord* hits, uint i, HitRecord h)
+{
+  CR_GLOBAL HitRecord* p = hits + i;
+  p->t = h.t;
+  p->prim = h.prim;
+  p->u = h.u;
+  p->v = h.v;
+}
+
+CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceStats* st)
+{
+#ifdef CR_STATS
+  CR_GLOBAL TraceStats* p = stats + i;
+  p->nIT = st->nIT;
+  p->nTS = st->nTS;
+  p->nLeaves = st->nLeaves;
+  p->nEmptyLeaves = st->nEmptyLeaves;
+#endif
+}
+
+#if !defined(CR_VARIANT_PACKET)
+
+/* One ray through the structure the build (or `accel`) selects. */
+CR_FUNC void Trace_One(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
+                       CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart,
+                       CR_GLOBAL const uint* gridRefs, CR_GLOBAL const OctreeHeader* octree,
+                       CR_GLOBAL const OctreeNode* octNodes, CR_GLOBAL const uint* octRefs, int accel,
+                       const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+{
+#if defined(CR_ACCEL_BVH)
+  BVH_Trace(bvhNodes, bvhRefs, pv, ray, hit, anyHit, st);
+#elif defined(CR_ACCEL_GRID)
+  Grid_Trace(grid, cellStart, gridRefs, pv, ray, hit, anyHit, st);
+#elif defined(CR_ACCEL_OCTREE)
+  Octree_Trace(octree, octNodes, octRefs, pv, ray, hit, anyHit, st);
+#else
+  if (accel == CR_ACCEL_ARG_BVH)
+    BVH_Trace(bvhNodes, bvhRefs, pv, ray, hit, anyHit, st);
+  else if (accel == CR_ACCEL_ARG_GRID)
+    Grid_Trace(grid, cellStart, gridRefs, pv, ray, hit, anyHit, st);
+  else
+    Octree_Trace(octree, octNodes, octRefs, pv, ray, hit, anyHit, st);
+#endif
+}
+
+#define CR_TRACE_ONE_ARGS bvhNodes, bvhRefs, grid, cellStart, gridRefs, octree, octNodes, octRefs, accel
+
+/* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]. */
+#ifndef CR_SOURCE_CAMERA
+__kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
+                         CR_GLOBAL TraceStats* stats)
+{
+  const uint i = (uint)get_global_id(0);
+  if (i >= nRays) return;
+  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const RayRecord rec = Trace_LoadRay(rays, i);
+  Ray ray;
+  Ray_Init(&ray, &rec);
+  Hit hit;
+  Hit_Init(&hit, &ray);
+  TraceStats st = {0, 0, 0, 0};
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, &ray, &hit, CR_QUERY_ANYHIT, &st);
+  Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+  Trace_StoreStats(stats, i, &st);
+}
+
+#endif
+
+#ifndef CR_SOURCE_RAYS
+/* Per-ray variant of the camera's primary rays, generated here; the 2D range
+ * covers the image in tiles; hits are row-major. */
+__kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 right, camreal4 up, camreal tanHalf,
+                            float tmin, int width, int height, CR_GLOBAL HitRecord* hits,
+                            CR_GLOBAL TraceStats* stats)
+{
+  const int px = (int)get_global_id(0), py = (int)get_global_id(1);
+  if (px >= width || py >= height) return;
+  const uint i = (uint)py * (uint)width + (uint)px;
+  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, px, py, width, height);
+  Ray ray;
+  Ray_Init(&ray, &rec);
+  Hit hit;
+  Hit_Init(&hit, &ray);
+  TraceStats st = {0, 0, 0, 0};
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, &ray, &hit, CR_QUERY_ANYHIT, &st);
+  Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+  Trace_StoreStats(stats, i, &st);
+}
+
+#endif
+#endif /* !CR_VARIANT_PACKET */
+
+#if defined(CR_WITH_BVH) && !defined(CR_VARIANT_RAY)
+
+/* The local memory of a packet traversal, declared at kernel scope (OpenCL
+ * 1.2 allows __local variables only there). */
+#define CR_PACKET_LOCALS                                      \
+  __local uint sStack[CR_BVH_STACK];                          \
+  __local uint sLane[CR_PACKET_SIZE];                         \
+  __local uint sState[4];                                     \
+  __local float sNode[CR_PACKET_NODE_FIELDS];                 \
+  __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE];   \
+  __local uint sAxes[CR_PACKET_SIZE];                         \
+  __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE];   \
+  __local uint sHitG[CR_PACKET_SIZE]
+#define CR_PACKET_LOCAL_ARGS sStack, sLane, sState, sNode, sRay, sAxes, sHit, sHitG
+
+/* The hit of one lane's ray after the group's packet traversal. */
+CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
+                         const RayRecord* rec, int live, uint lid, int anyHit, TraceStats* st,
+                         __local uint* sStack, __local uint* sLane, __local uint* sState,
+                         __local float* sNode, __local real* sRay, __local uint* sAxes, __local real* sHit,
+                         __local uint* sHitG)
+{
+  Ray ray;
+  Ray_Init(&ray, rec);
+  Hit hit;
+  Hit_Init(&hit, &ray);
+  BVHPacket_StoreRay(sRay, sAxes, lid, CR_PACKET_SIZE, &ray);
+  BVHPacket_StoreHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
+  BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, CR_PACKET_LOCAL_ARGS);
+  BVHPacket_LoadHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
+  return hit;
+}
+
+#ifndef CR_SOURCE_CAMERA
+/* Packet variant: the work-group is a packet (consecutive rays) that walks the
+ * BVH together (bvh_packet.cl). Lanes past nRays take part without a ray. */
+__kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
+    CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
+    CR_GLOBAL TraceStats* stats)
+{
+  CR_PACKET_LOCALS;
+  const uint i = (uint)get_global_id(0);
+  const uint lid = (uint)get_local_id(0);
+  const int live = i < nRays;
+  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const RayRecord rec = Trace_LoadRay(rays, live ? i : 0);
+  TraceStats st = {0, 0, 0, 0};
+  const Hit hit = Trace_Packet(&pv, bvhNodes, bvhRefs, &rec, live, lid, CR_QUERY_ANYHIT, &st,
+                               CR_PACKET_LOCAL_ARGS);
+  if (live) {
+    Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+    Trace_StoreStats(stats, i, &st);
+  }
+}
+
+#endif
+
+#ifndef CR_SOURCE_RAYS
+/* Packet variant of the primary rays: the work-group is a CR_PACKET_W x
+ * CR_PACKET_H screen tile. */
+__kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void Trace_PrimaryPacket(
+    CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 right, camreal4 up, camreal tanHalf, float tmin, int width,
+    int height, CR_GLOBAL HitRecord* hits, CR_GLOBAL TraceStats* stats)
+{
+  CR_PACKET_LOCALS;
+  const int px = (int)get_global_id(0), py = (int)get_global_id(1);
+  const uint lid = (uint)get_local_id(1) * CR_PACKET_W + (uint)get_local_id(0);
+  const int live = px < width && py < height;
+  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, live ? px : 0, live ? py : 0, width, height);
+  TraceStats st = {0, 0, 0, 0};
+  const Hit hit = Trace_Packet(&pv, bvhNodes, bvhRefs, &rec, live, lid, CR_QUERY_ANYHIT, &st,
+                               CR_PACKET_LOCAL_ARGS);
+  if (live) {
+    const uint i = (uint)py * (uint)width + (uint)px;
+    Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+    Trace_StoreStats(stats, i, &st);
+  }
+}
+
+#endif
+#endif /* packet BVH */
