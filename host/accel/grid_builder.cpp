@@ -31,7 +31,7 @@ namespace {
 // Cells per primitive when --grid-density is 0: the best overall value of
 // bench/grid_density_sweep.sh (SPD scenes, primary and shadow rays, scalar
 // backend, one thread).
-constexpr double kDefaultDensity = 4.0;
+constexpr double kDefaultDensity = 16.0;
 constexpr double kMaxDensity = 1024.0;
 constexpr int kMaxResAxis = 4096;
 constexpr std::uint64_t kMaxCells = std::uint64_t(1) << 28;  // cellStart: 1 GiB
@@ -124,6 +124,7 @@ void CellRange(const GridHeader& h, int axis, double lo, double hi, double eps, 
 }
 
 struct Builder {
+  explicit Builder(const Scene& s) : scene(s) {}
   const Scene& scene;
   GridHeader header{};
   double eps = 0.0;
@@ -206,7 +207,7 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
     return out;
   }
 
-  Builder b{scene, {}, 0.0, {}};
+  Builder b(scene);
   b.boxes.resize(n);
   tbb::parallel_for(std::uint32_t(0), n, [&](std::uint32_t g) { b.boxes[g] = scene.UnifiedBounds(g); });
   Bounds world;
@@ -232,8 +233,8 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   b.eps = 0x1p-18 * std::max(mag, maxExt);
 
   Res res = ChooseResolution(ext, density * double(n));
-  // Planes closer than a few hundred float ulps of the coordinates would
-  // collapse (or be dominated by the enlargement above): cap each axis.
+  // Cells thinner than about a hundred float ulps of the coordinates would
+  // blur (planes collapse, the enlargement above dominates): cap each axis.
   for (int a = 0; a < 3; ++a) {
     const double span = hi[a] - double(lo[a]);
     const double capD = std::floor(span / (0x1p-16 * std::max(mag, maxExt)));
