@@ -1,11 +1,98 @@
-/* Uniform grid traversal (3D-DDA): placeholder until the accel issue lands. */
+/* Uniform grid traversal: 3D-DDA (Amanatides & Woo 1987, "A Fast Voxel
+ * Traversal Algorithm for Ray Tracing"; Hearn & Baker, Computer Graphics,
+ * section 14-6, cell entry and exit). Layout: GridHeader in types.h.
+ *
+ * Robustness rules, which keep it exact in float:
+ *  - the crossing parameter of a cell plane is recomputed from the plane
+ *    (Grid_Plane) at every step, never accumulated, so a long walk does not
+ *    drift, and the builder inserted primitives against the same planes;
+ *  - the first cell is corrected until its entry planes lie at or before the
+ *    entry parameter and its exit planes at or after it, so the walk agrees
+ *    with the plane parameters from the start;
+ *  - a direction component +-0 gives inv = +-inf: the ray never crosses that
+ *    axis's planes, except a plane it lies in, which Ray_PlaneT puts at t = 0
+ *    (the walk then steps off it at once, towards the sign of the zero);
+ *  - hits: the closest hit over all cells so far is kept (Prim_Intersect),
+ *    and the walk stops only when it is at or before the current cell's exit
+ *    parameter; a hit beyond the exit (a primitive spanning several cells)
+ *    is kept while the walk goes on, since a later cell may hold a nearer one.
+ * Steps in x, y, z are monotone, so the walk ends after at most
+ * res[0] + res[1] + res[2] cells. */
 #ifndef CELLRAY_KERNELS_GRID_H
 #define CELLRAY_KERNELS_GRID_H
 #include "intersect.h"
 
+/* Plane i (0..res[axis]) of the grid along `axis`. Computed in float in every
+ * precision mode: the builder (host/accel/grid_builder.cpp) and the fp32 and
+ * fp64 traversals all see the same planes, to the bit. The grid box is
+ * [Grid_Plane(0), Grid_Plane(res)] on each axis (the builder stores it as
+ * bmin, bmax). */
+CR_FUNC real Grid_Plane(CR_GLOBAL const GridHeader* g, int axis, int i)
+{
+  const float p = g->bmin[axis] + (float)i * g->cellSize[axis];
+  return (real)p;
+}
+
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
+ * grid; `hit` must come from Hit_Init. */
 CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart, CR_GLOBAL const uint* refs,
                         const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
 {
+  if (grid->nRefs == 0u) return;
+  real tEnter;
+  if (!Box_Intersect(grid->bmin, grid->bmax, ray, ray->tmin, hit->t, &tEnter)) return;
+
+  int cell[3], step[3], res[3];
+  for (int a = 0; a < 3; ++a) {
+    res[a] = (int)grid->res[a];
+    /* The sign of inv, not of dir, so that -0 steps down and +0 up, as the
+     * NaN rule of Ray_PlaneT assumes. */
+    step[a] = ray->inv[a] < (real)0.0f ? -1 : 1;
+    /* First guess from the entry point (the conservative box test may put it
+     * slightly outside the box: clamp before converting to int). */
+    const real p = ray->org[a] + tEnter * ray->dir[a];
+    real rel = (p - Grid_Plane(grid, a, 0)) / (real)grid->cellSize[a];
+    rel = fmin(fmax(rel, (real)0.0f), (real)(res[a] - 1));
+    int c = (int)floor(rel);
+    /* Then make it consistent with the plane parameters the walk uses. */
+    if (step[a] > 0) {
+      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) > tEnter) --c;
+      while (c < res[a] - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) < tEnter) ++c;
+    } else {
+      while (c < res[a] - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) > tEnter) ++c;
+      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) < tEnter) --c;
+    }
+    cell[a] = c;
+  }
+
+  for (;;) {
+    CR_COUNT(st, nTS);
+    CR_COUNT(st, nLeaves);
+    const uint idx = (uint)cell[0] + grid->res[0] * ((uint)cell[1] + grid->res[1] * (uint)cell[2]);
+    const uint end = cellStart[idx + 1u];
+    const uint begin = cellStart[idx];
+    if (begin == end) CR_COUNT(st, nEmptyLeaves);
+    for (uint i = begin; i < end; ++i) {
+      CR_COUNT(st, nIT);
+      if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return;
+    }
+    /* Exit face: the smallest crossing parameter of the three exit planes. */
+    int axis = 0;
+    real tExit = (real)CR_INF;
+    for (int a = 0; a < 3; ++a) {
+      const int plane = step[a] > 0 ? cell[a] + 1 : cell[a];
+      const real t = Ray_PlaneT(ray, a, Grid_Plane(grid, a, plane));
+      if (t < tExit) {
+        tExit = t;
+        axis = a;
+      }
+    }
+    /* hit->t is the closest hit so far, or tmax: either way nothing farther
+     * can beat it once the walk has passed it. */
+    if (hit->t <= tExit) return;
+    cell[axis] += step[axis];
+    if (cell[axis] < 0 || cell[axis] >= res[axis]) return;
+  }
 }
 
 #endif /* CELLRAY_KERNELS_GRID_H */
