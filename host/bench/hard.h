@@ -1,0 +1,38 @@
+// The numerically hard cases (tests/hard/): generated scenes and ray sets,
+// each with exact expectations, run for every structure x backend x precision
+// mode. `cellray bench --hard` prints how many rays each combination gets
+// wrong; the test suite asserts 0 for robust and fp64.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "accel/accel.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+struct HardOptions {
+  std::vector<Backend> backends;      // empty: every backend available here
+  std::vector<AccelKind> accels;      // empty: grid, octree, bvh
+  std::vector<Precision> precisions;  // empty: fast, robust, fp64
+  bool quick = false;                 // reduced ray counts (CI)
+};
+
+struct HardCaseResult {
+  std::string caseName;  // e.g. "leaks/icosphere"
+  AccelKind accel = AccelKind::BVH;
+  Backend backend = Backend::Scalar;
+  Precision precision = Precision::Robust;
+  std::uint64_t rays = 0;
+  std::uint64_t wrong = 0;  // rays whose answer breaks the case's expectation
+  std::string note;         // e.g. "skipped: no OpenCL device"
+};
+
+std::vector<HardCaseResult> RunHardSuite(const HardOptions& options);
+
+// Markdown table: one row per case, one column per structure x backend x mode.
+std::string HardTableMarkdown(const std::vector<HardCaseResult>& results);
+
+}  // namespace cr
