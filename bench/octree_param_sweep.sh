@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Sweeps the octree's build parameters, --octree-leaf K (max references per
+# leaf) and --octree-depth D (max depth), over the SPD scenes: scalar backend,
+# one thread, primary rays (closest hit) and shadow rays (occlusion). Prints
+# one row per (K, D):
+#   time_sum   sum over scenes and both ray kinds of the median trace time (ms)
+#   rel_gmean  geometric mean over scenes x kinds of time / best time of that
+#              scene and kind over all (K, D): 1.00 = best everywhere
+#   IT, TS     intersection tests and traversal steps per ray, mean over
+#              scenes x kinds (Havran's N_IT and N_TS; machine independent)
+#   build_ms   sum of build times; MiB  sum of structure sizes
+# Timings are only as good as the machine is quiet.
+#
+# Usage: bench/octree_param_sweep.sh   (from the repository root)
+# Environment: CELLRAY (binary), SCENES, LEAVES, DEPTHS, SIZE (WxH), REPEAT.
+set -euo pipefail
+
+CELLRAY=${CELLRAY:-build/release/bin/cellray}
+SCENES=${SCENES:-"balls gears jacks lattice mount rings shells sombrero teapot tetra tree"}
+LEAVES=${LEAVES:-"2 4 8 16 32"}
+DEPTHS=${DEPTHS:-"6 8 10 12 14"}
+SIZE=${SIZE:-256x256}
+REPEAT=${REPEAT:-3}
+
+[ -x "$CELLRAY" ] || { echo "octree_param_sweep: no cellray binary at $CELLRAY (build first or set CELLRAY)" >&2; exit 2; }
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+
+# A number field of cellray's one-line JSON output (the first occurrence).
+field() { grep -o "\"$1\":[-0-9.eE+]*" <<<"$2" | head -n 1 | cut -d: -f2; }
+
+for s in $SCENES; do
+  for kind in primary shadow; do
+    "$CELLRAY" rays "scenes/spd/$s.nff" --kind "$kind" --size "$SIZE" -o "$WORK/$s.$kind.rays" >/dev/null
+  done
+done
+
+# One line per (K, D, scene, kind): time, IT, TS, build ms, bytes.
+RESULTS="$WORK/results.tsv"
+for K in $LEAVES; do
+  for D in $DEPTHS; do
+    for s in $SCENES; do
+      for kind in primary shadow; do
+        occl=()
+        [ "$kind" = shadow ] && occl=(--occlusion)
+        common=("scenes/spd/$s.nff" --rays "$WORK/$s.$kind.rays" "${occl[@]}" --accel octree --backend scalar
+                --threads 1 --octree-leaf "$K" --octree-depth "$D")
+        timed=$("$CELLRAY" trace "${common[@]}" --repeat "$REPEAT")
+        stats=$("$CELLRAY" trace "${common[@]}" --stats)
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$K" "$D" "$s" "$kind" "$(field trace_ms "$timed")" \
+          "$(field intersection_tests "$stats")" "$(field traversal_steps "$stats")" \
+          "$(field build_ms "$timed")" "$(field bytes "$stats")" >>"$RESULTS"
+      done
+    done
+  done
+done
+
+echo "octree parameter sweep: $(echo $SCENES | wc -w) SPD scenes, primary + shadow rays at $SIZE, scalar, 1 thread, median of $REPEAT"
+awk -F'\t' '
+  { key = $1 " " $2; sk = $3 " " $4; t[key, sk] = $5; keys[key] = 1; sks[sk] = 1
+    if (!(sk in best) || $5 < best[sk]) best[sk] = $5
+    sum[key] += $5; it[key] += $6; ts[key] += $7; n[key]++
+    if ($4 == "primary") { build[key] += $8; bytes[key] += $9 } }
+  END {
+    printf "%4s %4s %10s %10s %8s %8s %10s %8s\n", "K", "D", "time_sum", "rel_gmean", "IT", "TS", "build_ms", "MiB"
+    for (key in keys) {
+      lg = 0; m = 0
+      for (sk in sks) { lg += log(t[key, sk] / best[sk]); m++ }
+      split(key, kd, " ")
+      printf "%4d %4d %10.1f %10.3f %8.2f %8.2f %10.1f %8.2f\n", kd[1], kd[2], sum[key], exp(lg / m),
+             it[key] / n[key], ts[key] / n[key], build[key], bytes[key] / 1048576
+    }
+  }' "$RESULTS" | { read -r header; echo "$header"; sort -k1,1n -k2,2n; }
