@@ -51,6 +51,10 @@ constexpr double kMaxDuplication = 4.0;
 constexpr double kCellPadRel = 0x1p-19;
 // Nodes with more references than this split their octants in parallel.
 constexpr std::size_t kParallelRefs = 2048;
+// References a build may hold (512 MiB as uint32). Primitives that share an
+// edge can never be separated: with --octree-leaf 1 every cell along every
+// shared edge subdivides down to the depth limit, 2^D cells per edge.
+constexpr std::uint64_t kMaxRefs = std::uint64_t(1) << 27;
 
 struct DBox {
   double lo[3], hi[3];
@@ -82,6 +86,7 @@ class Builder {
   OctreeHeader header{};
   double pad = 0.0;
   std::atomic<std::uint64_t> nNodes{0}, nRefs{0}, nUnsplit{0};
+  std::atomic<std::uint64_t> nLive{0};  // references held by the tree so far
   std::atomic<int> reached{0};
 
   // Fits the padded cube around the scene; planes checked with Octree_Plane.
@@ -165,6 +170,11 @@ class Builder {
       nUnsplit.fetch_add(1, std::memory_order_relaxed);
       return Leaf(node, level);
     }
+    // Every reference of the node goes to at least one child: sum >= n.
+    if (nLive.fetch_add(sum - n, std::memory_order_relaxed) + (sum - n) > kMaxRefs)
+      throw RuntimeError(fmt::format("octree: more than {} references with --octree-leaf {} --octree-depth {}: "
+                                     "raise the leaf size or lower the depth",
+                                     kMaxRefs, maxLeaf_, maxDepth_));
     node.refs.clear();
     node.refs.shrink_to_fit();
     for (int o = 0; o < 8; ++o) {
@@ -317,6 +327,7 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   } else {
     bld.FitRoot();
     root->refs.resize(n);
+    bld.nLive = n;
     std::iota(root->refs.begin(), root->refs.end(), 0u);
     bld.Build(*root, 0, {0u, 0u, 0u});
   }
