@@ -3,7 +3,9 @@
 # leaf) and --octree-depth D (max depth), over the SPD scenes: scalar backend,
 # one thread, primary rays (closest hit) and shadow rays (occlusion). Prints
 # one row per (K, D):
-#   time_sum   sum over scenes and both ray kinds of the median trace time (ms)
+#   time_sum   sum over scenes and both ray kinds of the trace time (ms): the
+#              fastest of REPEAT runs (TIME=trace_ms for the median), since
+#              other work on a shared machine only ever adds time
 #   rel_gmean  geometric mean over scenes x kinds of time / best time of that
 #              scene and kind over all (K, D): 1.00 = best everywhere
 #   IT, TS     intersection tests and traversal steps per ray, mean over
@@ -12,7 +14,9 @@
 # Timings are only as good as the machine is quiet.
 #
 # Usage: bench/octree_param_sweep.sh   (from the repository root)
-# Environment: CELLRAY (binary), SCENES, LEAVES, DEPTHS, SIZE (WxH), REPEAT.
+# Environment: CELLRAY (binary), SCENES, LEAVES, DEPTHS, SIZE (WxH), REPEAT,
+# TIME (trace_ms_min or trace_ms), RAW (a file to keep the per-scene table in:
+# K D scene kind ms IT TS build_ms bytes).
 set -euo pipefail
 
 CELLRAY=${CELLRAY:-build/release/bin/cellray}
@@ -20,7 +24,9 @@ SCENES=${SCENES:-"balls gears jacks lattice mount rings shells sombrero teapot t
 LEAVES=${LEAVES:-"2 4 8 16 32"}
 DEPTHS=${DEPTHS:-"6 8 10 12 14"}
 SIZE=${SIZE:-256x256}
-REPEAT=${REPEAT:-3}
+REPEAT=${REPEAT:-5}
+TIME=${TIME:-trace_ms_min}
+RAW=${RAW:-}
 
 [ -x "$CELLRAY" ] || { echo "octree_param_sweep: no cellray binary at $CELLRAY (build first or set CELLRAY)" >&2; exit 2; }
 WORK=$(mktemp -d)
@@ -37,17 +43,19 @@ done
 
 # One line per (K, D, scene, kind): time, IT, TS, build ms, bytes.
 RESULTS="$WORK/results.tsv"
-for K in $LEAVES; do
-  for D in $DEPTHS; do
-    for s in $SCENES; do
-      for kind in primary shadow; do
+# Configurations innermost: a change of load on a shared machine then hits
+# every (K, D) of a scene alike instead of biasing whole rows.
+for s in $SCENES; do
+  for kind in primary shadow; do
+    for K in $LEAVES; do
+      for D in $DEPTHS; do
         occl=()
         [ "$kind" = shadow ] && occl=(--occlusion)
         common=("scenes/spd/$s.nff" --rays "$WORK/$s.$kind.rays" "${occl[@]}" --accel octree --backend scalar
                 --threads 1 --octree-leaf "$K" --octree-depth "$D")
         timed=$("$CELLRAY" trace "${common[@]}" --repeat "$REPEAT")
         stats=$("$CELLRAY" trace "${common[@]}" --stats)
-        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$K" "$D" "$s" "$kind" "$(field trace_ms "$timed")" \
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$K" "$D" "$s" "$kind" "$(field "$TIME" "$timed")" \
           "$(field intersection_tests "$stats")" "$(field traversal_steps "$stats")" \
           "$(field build_ms "$timed")" "$(field bytes "$stats")" >>"$RESULTS"
       done
@@ -55,7 +63,8 @@ for K in $LEAVES; do
   done
 done
 
-echo "octree parameter sweep: $(echo $SCENES | wc -w) SPD scenes, primary + shadow rays at $SIZE, scalar, 1 thread, median of $REPEAT"
+[ -n "$RAW" ] && cp "$RESULTS" "$RAW"
+echo "octree parameter sweep: $(echo $SCENES | wc -w) SPD scenes, primary + shadow rays at $SIZE, scalar, 1 thread, $TIME of $REPEAT"
 awk -F'\t' '
   { key = $1 " " $2; sk = $3 " " $4; t[key, sk] = $5; keys[key] = 1; sks[sk] = 1
     if (!(sk in best) || $5 < best[sk]) best[sk] = $5

@@ -366,3 +366,59 @@ TEST_CASE("octree: layout invariants on the SPD scenes")
     CHECK(info.emptyLeaves == nEmpty);
   }
 }
+
+TEST_CASE("octree: an empty scene is one empty root leaf that every ray misses")
+{
+  const Scene scene;
+  AccelInfo info;
+  const OctreeData oct = BuildOctree(scene, AccelParams{}, info);
+  REQUIRE(oct.nodes.size() == 1);
+  CHECK(oct.nodes[0].childMask == 0);
+  CHECK(oct.nodes[0].count == 0);
+  CHECK(info.emptyLeaves == 1);
+  const auto hits = Trace(scene, AccelParams{}, Precision::Robust, {RayAt(0.5f, 0.5f, -1.0f, 0.0f, 0.0f, 1.0f)}, false);
+  CHECK(hits[0].prim == CR_NO_HIT);
+}
+
+TEST_CASE("octree: random rays snapped to cell planes, with +-0 direction components, agree with the reference")
+{
+  // Origins anywhere in the root cube with some coordinates moved exactly
+  // onto a cell plane of a random level; some direction components +0 or -0.
+  for (const char* name : {"balls", "teapot", "rings", "tetra"}) {
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    const OctreeHeader h = HeaderOf(scene, AccelParams{});
+    std::vector<RayRecord> rays;
+    const std::uint64_t n = 6000;
+    for (std::uint64_t i = 0; i < n; ++i) {
+      auto rnd = [&](std::uint64_t k) { return ToUnit(HashRandom(11, i, k)); };
+      const unsigned level = 1 + unsigned(rnd(0) * std::max(1u, h.maxDepth));
+      const float cell = h.rootSize * std::ldexp(1.0f, -int(level));
+      RayRecord r{};
+      bool anyDir = false;
+      for (int a = 0; a < 3; ++a) {
+        float x = h.rootMin[a] + float(rnd(1 + a)) * h.rootSize;
+        if (rnd(4 + a) < 0.6) x = Plane(h, a, level, unsigned(std::lround((x - h.rootMin[a]) / cell)));
+        r.org[a] = x;
+        float d = float(2.0 * rnd(7 + a) - 1.0);
+        if (rnd(10 + a) < 0.35) d = rnd(13 + a) < 0.5 ? 0.0f : -0.0f;
+        r.dir[a] = d;
+        anyDir = anyDir || d != 0.0f;
+      }
+      if (!anyDir) r.dir[int(rnd(16) * 3) % 3] = 1.0f;
+      r.tmin = 0.0f;
+      r.tmax = kInf;
+      rays.push_back(r);
+    }
+    for (Precision prec : kPrecisions)
+      for (bool occlusion : {false, true}) {
+        TraceConfig cfg;
+        cfg.backend = Backend::Scalar;
+        cfg.accel = AccelKind::Octree;
+        cfg.precision = prec;
+        const auto r = test::CheckTracer(scene, cfg, rays, occlusion);
+        INFO(name, " ", PrecisionName(prec), occlusion ? " occlusion: " : " closest: ", r.wrong, " wrong of ", r.rays,
+             r.firstWrong.empty() ? std::string() : " (first " + std::to_string(r.firstWrong[0]) + ")");
+        CHECK(r.wrong == 0);
+      }
+  }
+}
