@@ -13,6 +13,15 @@
 #   build_ms   sum of build times; MiB  sum of structure sizes
 # Timings are only as good as the machine is quiet.
 #
+# Measured when the defaults were chosen (256x256, fastest of 5, a shared
+# 2-core machine): time_sum in ms at D = 8 / 10 / 12
+#   K = 4: 1226 / 1103 / 1096    K = 8: 1178 / 1037 / 1025
+#   K = 6: 1202 / 1047 / 1055    K = 12: 1152 / 1012 / 1010 (964 / 961 rerun)
+#   K = 16: 1151 / 1012 / 1005 (966 / 957 rerun)   K = 24: 1011 / 1022 and
+#   K = 32: 1093 / 1091 at D = 10 / 12.
+# Hence leaf 12, depth 10: as fast as any, and depth 12 only adds memory
+# (20.7 against 13.9 MiB summed over the scenes) and build time.
+#
 # Usage: bench/octree_param_sweep.sh   (from the repository root)
 # Environment: CELLRAY (binary), SCENES, LEAVES, DEPTHS, SIZE (WxH), REPEAT,
 # TIME (trace_ms_min or trace_ms), RAW (a file to keep the per-scene table in:
@@ -21,8 +30,8 @@ set -euo pipefail
 
 CELLRAY=${CELLRAY:-build/release/bin/cellray}
 SCENES=${SCENES:-"balls gears jacks lattice mount rings shells sombrero teapot tetra tree"}
-LEAVES=${LEAVES:-"2 4 8 16 32"}
-DEPTHS=${DEPTHS:-"6 8 10 12 14"}
+LEAVES=${LEAVES:-"4 8 12 16 24 32"}
+DEPTHS=${DEPTHS:-"8 10 12"}
 SIZE=${SIZE:-256x256}
 REPEAT=${REPEAT:-5}
 TIME=${TIME:-trace_ms_min}
