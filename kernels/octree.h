@@ -1,12 +1,182 @@
-/* Octree traversal: placeholder until the accel issue lands. */
+/* Octree traversal: front to back by cell entry and exit parameters, after
+ * Revelles, Urena & Lastra 2000, "An efficient parametric algorithm for octree
+ * traversal", made robust:
+ *  - every parameter comes directly from a cell plane (Octree_Plane, the only
+ *    place planes are computed, shared with the builder) through Ray_PlaneT,
+ *    never from averages of other parameters, so axis-parallel rays (0 * inf)
+ *    and rays in a cell plane are well defined and neighbouring cells share
+ *    their boundary parameters bit for bit;
+ *  - in Revelles' mirrored space (an axis whose direction has its sign bit set,
+ *    -0 included, is flipped: its near plane is the high one) the parameters
+ *    t0 <= tm <= t1 of each axis are monotone, so the children of a node tile
+ *    its parameter interval with closed intervals, none of them empty;
+ *  - the builder inserts a primitive into every cell its exact shape meets
+ *    after the cell is grown by a small epsilon, which covers the rounding of
+ *    these parameters;
+ *  - hits are kept across leaves: a primitive stored in several leaves may be
+ *    hit beyond the current leaf's exit; the search stops only when the
+ *    closest hit so far lies within the current cell (t <= its exit).
+ * Layout: OctreeHeader and OctreeNode in types.h. Iterative with an explicit
+ * stack (OpenCL has no recursion). */
 #ifndef CELLRAY_KERNELS_OCTREE_H
 #define CELLRAY_KERNELS_OCTREE_H
 #include "intersect.h"
 
+/* Deepest level the builder may create (host/accel/octree_builder.cpp checks
+ * --octree-depth against it). Interior nodes lie at levels < this, so it also
+ * bounds the traversal stack. Beyond 20 levels a cell (2^-20 of the root) is
+ * about as small as the float spacing of the coordinates: deeper cells could
+ * not separate anything. */
+#define CR_OCTREE_MAX_DEPTH 20
+
+/* Plane i (0 <= i <= 2^level) of `level` on `axis`:
+ * rootMin + i * (rootSize * 2^-level). rootSize * 2^-level is exact, and
+ * i * that is the same real number as 2i * (rootSize * 2^-(level+1)), rounded
+ * once in both cases, so plane i of a level is plane 2i of the next, bit for
+ * bit. Always float, whatever `real` is: the builder and every precision mode
+ * see the same planes. */
+CR_FUNC float Octree_Plane(CR_GLOBAL const OctreeHeader* hdr, int axis, uint level, uint i)
+{
+  const float cell = hdr->rootSize * cr_bits_float((127u - level) << 23);
+  return hdr->rootMin[axis] + (float)i * cell;
+}
+
+/* Mirrored near (t0), mid (tm) and far (t1) parameters, per axis, of the cell
+ * at `level` with integer coordinates c. */
+CR_FUNC void Octree_CellT(CR_GLOBAL const OctreeHeader* hdr, const Ray* ray, uint signMask, uint level, const uint c[3],
+                          real t0[3], real tm[3], real t1[3])
+{
+  for (int a = 0; a < 3; ++a) {
+    const real lo = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level, c[a]));
+    const real hi = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level, c[a] + 1u));
+    tm[a] = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level + 1u, 2u * c[a] + 1u));
+    const int neg = (int)((signMask >> a) & 1u);
+    t0[a] = neg ? hi : lo;
+    t1[a] = neg ? lo : hi;
+  }
+}
+
+/* Revelles' first child (mirrored octant) of a node entered at tStart: the
+ * bit of an axis is set when its mid plane lies before tStart. */
+CR_FUNC uint Octree_FirstChild(const real tm[3], real tStart)
+{
+  return (tm[0] < tStart ? 1u : 0u) | (tm[1] < tStart ? 2u : 0u) | (tm[2] < tStart ? 4u : 0u);
+}
+
+/* Tests a leaf's references. Returns 1 when the query is answered: any hit
+ * (anyHit), or a closest hit so far that lies within the leaf (t <= tExit).
+ * A hit beyond tExit is kept, but a nearer one may lie in a later cell. */
+CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray,
+                        Hit* hit, int anyHit, real tExit, TraceStats* st)
+{
+  CR_COUNT(st, nLeaves);
+  if (n->count == 0u) CR_COUNT(st, nEmptyLeaves);
+  const uint end = n->first + n->count;
+  for (uint i = n->first; i < end; ++i) {
+    CR_COUNT(st, nIT);
+    if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return 1;
+  }
+  return hit->t <= tExit ? 1 : 0;
+}
+
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
+ * octree; `hit` must come from Hit_Init. Counts (CR_STATS): nTS nodes visited
+ * (interior, leaf and empty octant), nLeaves leaf cells visited (empty
+ * octants included), nEmptyLeaves empty ones, nIT primitive tests. */
 CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
                           CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray, Hit* hit, int anyHit,
                           TraceStats* st)
 {
+  /* inv = 1/dir keeps the sign bit of dir: -0 gives -inf, so it is mirrored. */
+  uint signMask = 0u;
+  for (int a = 0; a < 3; ++a)
+    if (ray->inv[a] < (real)0.0f) signMask |= 1u << a;
+
+  /* The current interior node: index, level, integer coordinates, and its
+   * mirrored plane parameters. The stack holds the ancestors' indices and
+   * current children; their coordinates are c >> 1 and their parameters are
+   * recomputed from the planes when the traversal climbs back. */
+  uint c[3] = {0u, 0u, 0u};
+  uint level = 0u;
+  real t0[3], tm[3], t1[3];
+  Octree_CellT(hdr, ray, signMask, 0u, c, t0, tm, t1);
+  const real rootEnter = fmax(fmax(t0[0], t0[1]), t0[2]);
+  const real rootExit = fmin(fmin(t1[0], t1[1]), t1[2]);
+  if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
+  CR_COUNT(st, nTS);
+  if (nodes[0].childMask == 0u) {
+    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rootExit, st);
+    return;
+  }
+  uint stackNode[CR_OCTREE_MAX_DEPTH];
+  uint stackChild[CR_OCTREE_MAX_DEPTH];
+  int sp = 0;
+  uint ni = 0u;
+  uint m = Octree_FirstChild(tm, fmax(rootEnter, ray->tmin)); /* current child, mirrored octant */
+  for (;;) {
+    /* Child m of node ni spans [ce, cx]. */
+    const real ce = fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]);
+    const real cx = fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]);
+    /* Front to back: every later cell starts at or after ce. */
+    if (ce > hit->t) return;
+    if (ce <= cx && cx >= ray->tmin) {
+      const uint o = m ^ signMask;
+      CR_GLOBAL const OctreeNode* n = nodes + ni;
+      CR_COUNT(st, nTS);
+      if (((n->childMask >> o) & 1u) == 0u) {
+        /* An empty octant: an empty leaf that is not stored. */
+        CR_COUNT(st, nLeaves);
+        CR_COUNT(st, nEmptyLeaves);
+        if (hit->t <= cx) return;
+      } else {
+        const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
+        if (nodes[ci].childMask == 0u) {
+          if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, cx, st)) return;
+        } else {
+          /* Descend. The child's near and far planes are planes of the
+           * parent (same values, bit for bit); only its mid planes are new. */
+          CR_ASSERT(sp < CR_OCTREE_MAX_DEPTH);
+          stackNode[sp] = ni;
+          stackChild[sp] = m;
+          ++sp;
+          ++level;
+          for (int a = 0; a < 3; ++a) {
+            c[a] = 2u * c[a] + ((o >> a) & 1u);
+            if ((m >> a) & 1u)
+              t0[a] = tm[a];
+            else
+              t1[a] = tm[a];
+            tm[a] = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level + 1u, 2u * c[a] + 1u));
+          }
+          ni = ci;
+          m = Octree_FirstChild(tm, fmax(ce, ray->tmin));
+          continue;
+        }
+      }
+    }
+    /* Next child: across the exit plane of child m (the axis of its smallest
+     * far parameter). If that bit is already set, the exit plane is the
+     * node's own far plane: the ray leaves the node; climb and repeat. */
+    for (;;) {
+      const real fx = (m & 1u) ? t1[0] : tm[0];
+      const real fy = (m & 2u) ? t1[1] : tm[1];
+      const real fz = (m & 4u) ? t1[2] : tm[2];
+      const uint bit = (fx <= fy) ? (fx <= fz ? 1u : 4u) : (fy <= fz ? 2u : 4u);
+      if ((m & bit) == 0u) {
+        m |= bit;
+        break;
+      }
+      if (sp == 0) return;
+      --sp;
+      ni = stackNode[sp];
+      m = stackChild[sp];
+      --level;
+      c[0] >>= 1;
+      c[1] >>= 1;
+      c[2] >>= 1;
+      Octree_CellT(hdr, ray, signMask, level, c, t0, tm, t1);
+    }
+  }
 }
 
 #endif /* CELLRAY_KERNELS_OCTREE_H */

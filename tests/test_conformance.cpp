@@ -7,7 +7,7 @@ using namespace cr;
 
 namespace {
 
-const AccelKind kAccels[] = {AccelKind::BVH, AccelKind::Grid};
+const AccelKind kAccels[] = {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree};
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 
 void RunConformance(Backend backend, Precision precision, int size)
