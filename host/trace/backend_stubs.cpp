@@ -3,10 +3,6 @@
 #include "trace/tracer.h"
 
 namespace cr {
-std::unique_ptr<Tracer> CreateSimdTracer(const Scene&, const TraceConfig&)
-{
-  throw RuntimeError("--backend simd: not implemented yet");
-}
 std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene&, const TraceConfig&)
 {
   throw RuntimeError("--backend opencl: not implemented yet");

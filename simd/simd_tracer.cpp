@@ -1,0 +1,213 @@
+// The `simd` backend: BVH traversal with explicit SSE4.1 / AVX2 kernels,
+// chosen at run time (simd/isa.h), parallel over rays with oneTBB.
+//
+// Variants: `packet` (N coherent rays walk the binary BVH together,
+// simd/bvh_packet.h), `single` (one ray through the N-wide BVH,
+// simd/bvh_single.h), `auto` (packets when the ray set looks coherent,
+// simd/ray_coherence.h; see docs/SIMD.md for the measurements behind it).
+// What this backend does not implement is delegated to the scalar backend
+// (the kernels of kernels/ compiled as C++), and VariantName says so:
+// --isa scalar, --precision fp64, and the grid and octree structures (until
+// their SIMD traversals land).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "simd/bvh_wide_builder.h"
+#include "simd/isa.h"
+#include "simd/ray_coherence.h"
+#include "simd/simd_kernels.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig& config);
+
+namespace simd {
+
+namespace {
+
+enum class Variant { Auto, Packet, Single };
+
+Variant ParseVariant(const std::string& s)
+{
+  if (s.empty() || s == "auto") return Variant::Auto;
+  if (s == "packet") return Variant::Packet;
+  if (s == "single" || s == "ray") return Variant::Single;
+  throw InputError(fmt::format("--variant '{}': the simd backend has packet, single (or ray) and auto", s));
+}
+
+// Packets pay off when most groups of consecutive rays share a direction
+// cone (docs/SIMD.md: primary and shadow rays yes, diffuse and random no).
+constexpr double kAutoPacketFraction = 0.5;
+
+struct IsaEntry {
+  KernelFn (*packet)(const KernelKey&);
+  KernelFn (*single)(const KernelKey&);
+  KernelProbes (*probes)();
+};
+
+IsaEntry EntryOf(Isa isa)
+{
+#if defined(CELLRAY_SIMD_X86)
+  if (isa == Isa::Avx2) return {&avx2::SelectPacketKernel, &avx2::SelectSingleKernel, &avx2::Probes};
+  if (isa == Isa::Sse4) return {&sse4::SelectPacketKernel, &sse4::SelectSingleKernel, &sse4::Probes};
+#endif
+  throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
+}
+
+class SimdTracer final : public Tracer {
+ public:
+  SimdTracer(const Scene& scene, const TraceConfig& cfg, Isa isa, Variant variant)
+      : scene_(scene), config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds())
+  {
+    data_ = BuildAccel(scene, cfg.accel, cfg.params);
+    info_ = data_.info;
+    const IsaEntry e = EntryOf(isa);
+    const KernelProbes probes = e.probes();
+    width_ = probes.width;
+    cones_ = MakeConeData(scene);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (variant_ != Variant::Packet) {
+      wide_ = BuildWideBVH(data_.bvh, scene, cones_, probes.width, probes.packWidth);
+      info_.bytes += wide_->Bytes();
+      info_.params += fmt::format(" simd=bvh{}x{} wide_nodes={} wide_bytes={}", probes.width, probes.packWidth,
+                                  wide_->Nodes(), wide_->Bytes());
+    }
+    info_.bytes += cones_.size() * sizeof(ConeData);
+    info_.buildMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    sc_.nodes = data_.bvh.nodes.data();
+    sc_.refs = data_.bvh.refs.data();
+    if (wide_) wide_->Bind(sc_);
+    sc_.spheres = scene.spheres.data();
+    sc_.triangles = scene.triangles.data();
+    sc_.cones = cones_.data();
+    sc_.counts = scene.Counts();
+    sc_.primIds = primIds_.data();
+    sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
+
+    KernelKey key;
+    key.types = (scene.spheres.empty() ? 0u : kSphereBit) | (scene.triangles.empty() ? 0u : kTriangleBit) |
+                (scene.cones.empty() ? 0u : kConeBit);
+    key.fast = cfg.precision == Precision::Fast;
+    key.stats = cfg.stats;
+    key.packet = true;
+    packetFn_ = e.packet(key);
+    key.packet = false;
+    singleFn_ = e.single(key);
+  }
+
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    hits.resize(rays.size());
+    traced_ = true;
+    usedPacket_ = variant_ == Variant::Packet ||
+                  (variant_ == Variant::Auto && SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction);
+    const bool wantStats = config_.stats && stats;
+    if (!packetFn_) {
+      // No primitives: every ray misses.
+      for (auto& h : hits) h = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+      if (wantStats) stats->rays += rays.size();
+      return;
+    }
+    const KernelFn fn = usedPacket_ ? packetFn_ : singleFn_;
+    // Blocks of whole packets; small enough to balance, large enough to
+    // amortise the scheduling.
+    const std::size_t unit = usedPacket_ ? std::size_t(width_) : 1;
+    const std::size_t nUnits = (rays.size() + unit - 1) / unit;
+    const std::size_t grain = usedPacket_ ? 16 : 64;
+    tbb::enumerable_thread_specific<KernelStats> local;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      KernelJob job;
+      job.rays = rays.data();
+      job.hits = hits.data();
+      job.begin = r.begin() * unit;
+      job.end = std::min(r.end() * unit, rays.size());
+      job.occlusion = occlusion ? 1 : 0;
+      job.stats = wantStats ? &local.local() : nullptr;
+      fn(sc_, job);
+    });
+    if (wantStats) {
+      for (const KernelStats& s : local) {
+        stats->rays += s.rays;
+        stats->nIT += s.nIT;
+        stats->nTS += s.nTS;
+        stats->nLeaves += s.nLeaves;
+        stats->nEmptyLeaves += s.nEmptyLeaves;
+      }
+    }
+  }
+
+  std::string DeviceName() const override { return "cpu"; }
+  std::string VariantName() const override
+  {
+    std::string v = usedPacket_ ? "packet" : "single";
+    if (variant_ == Variant::Auto && !traced_) v = "auto";
+    return fmt::format("{} {}{}", IsaName(isa_), v, config_.precision == Precision::Fast ? " fast" : "");
+  }
+
+ private:
+  const Scene& scene_;
+  TraceConfig config_;
+  Isa isa_;
+  Variant variant_;
+  AccelData data_;
+  std::vector<std::uint32_t> primIds_;
+  std::vector<ConeData> cones_;
+  std::unique_ptr<WideBVHBase> wide_;
+  KernelScene sc_;
+  KernelFn packetFn_ = nullptr, singleFn_ = nullptr;
+  int width_ = 4;
+  bool usedPacket_ = false;
+  bool traced_ = false;
+};
+
+// What the SIMD backend hands to the scalar one, named in VariantName.
+class DelegatingTracer final : public Tracer {
+ public:
+  DelegatingTracer(std::unique_ptr<Tracer> inner, std::string why) : inner_(std::move(inner)), why_(std::move(why))
+  {
+    info_ = inner_->Info();
+  }
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    inner_->Trace(rays, hits, occlusion, stats);
+  }
+  std::string DeviceName() const override { return inner_->DeviceName(); }
+  std::string VariantName() const override { return fmt::format("scalar ray ({})", why_); }
+
+ private:
+  std::unique_ptr<Tracer> inner_;
+  std::string why_;
+};
+
+}  // namespace
+
+}  // namespace simd
+
+std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config)
+{
+  using namespace simd;
+  const Isa isa = ParseIsa(config.isa);
+  const Variant variant = ParseVariant(config.variant);
+  std::string why;
+  if (isa == Isa::Scalar)
+    why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
+  else if (config.precision == Precision::Fp64)
+    why = "fp64 delegated";
+  else if (config.accel != AccelKind::BVH)
+    why = fmt::format("{} delegated", AccelKindName(config.accel));
+  if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
+  return std::make_unique<SimdTracer>(scene, config, isa, variant);
+}
+
+}  // namespace cr
