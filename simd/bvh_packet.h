@@ -26,6 +26,11 @@ struct RayPacket {
   vfloat<N> s[3];     // shear constants sx, sy, sz
   vint<N> sel[3];     // ComponentSelector of kx, ky, kz
   vfloat<N> orgK[3];  // org[kx], org[ky], org[kz]
+  // When every lane has the same direction signs (coherent packets), the
+  // near plane of axis a is node float nearOff[a] for all lanes (bmin[a] or
+  // bmax[a] as BVHNode lays them out), and the per-lane plane choice is skipped.
+  bool sameSigns;
+  int nearOff[3], farOff[3];
 };
 
 template <int N>
@@ -34,48 +39,82 @@ struct HitPacket {
   vint<N> g;
 };
 
-// Lanes from prepared rays (Ray_Init), hits as Hit_Init leaves them.
+// Ray_Init of kernels/ray.h on all lanes at once, from the N records (a
+// lane's record pointer may repeat another's to pad the packet); hits as
+// Hit_Init leaves them. Same operations as Ray_Init, lane by lane: the
+// reciprocals and shear constants are IEEE divisions, the dominant axis kz
+// comes from the same comparisons (so NaN components choose as they do).
 template <int N>
-inline void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const Ray* rays)
+CR_SIMD_INLINE void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const RayRecord* const recs[N])
 {
-  alignas(32) float org[3][N], dir[3][N], inv[3][N], s[3][N], orgK[3][N], tmin[N], tmax[N];
-  alignas(32) std::uint32_t k[3][N];
-  for (int l = 0; l < N; ++l) {
-    const Ray& r = rays[l];
-    const int kk[3] = {r.kx, r.ky, r.kz};
-    for (int a = 0; a < 3; ++a) {
-      org[a][l] = r.org[a];
-      dir[a][l] = r.dir[a];
-      inv[a][l] = r.inv[a];
-      k[a][l] = static_cast<std::uint32_t>(kk[a]);
-      orgK[a][l] = r.org[kk[a]];
-    }
-    s[0][l] = r.sx;
-    s[1][l] = r.sy;
-    s[2][l] = r.sz;
-    tmin[l] = r.tmin;
-    tmax[l] = r.tmax;
-  }
+  static_assert(sizeof(RayRecord) == 8 * sizeof(float));
+  const float* rows[N];
+  for (int l = 0; l < N; ++l) rows[l] = recs[l]->org;
+  vfloat<N> c[8];  // org x y z, tmin, dir x y z, tmax
+  LoadTransposed(rows, c);
+  const vfloat<N>* org = c;
+  const vfloat<N>* dir = c + 4;
   for (int a = 0; a < 3; ++a) {
-    p.org[a] = vfloat<N>::Load(org[a]);
-    p.dir[a] = vfloat<N>::Load(dir[a]);
-    p.inv[a] = vfloat<N>::Load(inv[a]);
+    p.org[a] = org[a];
+    p.dir[a] = dir[a];
+    p.inv[a] = vfloat<N>(1.0f) / dir[a];
     p.invNeg[a] = p.inv[a] < vfloat<N>(0.0f);
-    p.s[a] = vfloat<N>::Load(s[a]);
-    p.sel[a] = ComponentSelector(vint<N>::Load(k[a]));
-    p.orgK[a] = vfloat<N>::Load(orgK[a]);
   }
-  p.tmin = vfloat<N>::Load(tmin);
-  h.t = vfloat<N>::Load(tmax);
+  p.tmin = c[3];
+  h.t = c[7];
   h.u = vfloat<N>(0.0f);
   h.v = vfloat<N>(0.0f);
   h.g = vint<N>(static_cast<int>(CR_NO_HIT));
+
+  const vfloat<N> ax = Abs(dir[0]), ay = Abs(dir[1]), az = Abs(dir[2]);
+  const vint<N> k0(0), k1(1), k2(2);
+  const vint<N> kz = Select(ax > ay, Select(ax > az, k0, k2), Select(ay > az, k1, k2));
+  vint<N> kx = Select(kz == k2, k0, kz + k1);
+  vint<N> ky = Select(kx == k2, k0, kx + k1);
+  auto pick = [&](const vfloat<N>* v, vint<N> k) { return Select(k == k0, v[0], Select(k == k1, v[1], v[2])); };
+  const vfloat<N> dz = pick(dir, kz);
+  const vbool<N> flip = dz < vfloat<N>(0.0f);
+  const vint<N> kxs = Select(flip, ky, kx);
+  ky = Select(flip, kx, ky);
+  kx = kxs;
+  p.s[0] = pick(dir, kx) / dz;
+  p.s[1] = pick(dir, ky) / dz;
+  p.s[2] = vfloat<N>(1.0f) / dz;
+  const vint<N> k[3] = {kx, ky, kz};
+  for (int j = 0; j < 3; ++j) {
+    p.sel[j] = ComponentSelector(k[j]);
+    p.orgK[j] = pick(org, k[j]);
+  }
+  p.sameSigns = true;
+  for (int a = 0; a < 3; ++a) {
+    const unsigned neg = p.invNeg[a].Bits();
+    p.sameSigns = p.sameSigns && (neg == 0 || neg == vbool<N>::kAll);
+    p.nearOff[a] = neg ? 4 + a : a;  // BVHNode: bmin at floats 0..2, bmax at 4..6
+    p.farOff[a] = neg ? a : 4 + a;
+  }
+}
+
+// Box_Intersect of one node against every lane.
+template <int N, bool kFast>
+CR_SIMD_INLINE vbool<N> PacketBox_Intersect(const BVHNode& node, const RayPacket<N>& P, vfloat<N> tmax,
+                                            vfloat<N>& tEnter)
+{
+  if (P.sameSigns) {
+    const float* f = reinterpret_cast<const float*>(&node);
+    vfloat<N> n[3], fa[3];
+    for (int a = 0; a < 3; ++a) {
+      n[a] = (vfloat<N>(f[P.nearOff[a]]) - P.org[a]) * P.inv[a];
+      fa[a] = (vfloat<N>(f[P.farOff[a]]) - P.org[a]) * P.inv[a];
+    }
+    return Box_Finish<kFast, N>(n, fa, P.tmin, tmax, tEnter);
+  }
+  return Box_IntersectRays<kFast, N>(node.bmin, node.bmax, P.org, P.inv, P.invNeg, P.tmin, tmax, tEnter);
 }
 
 // Primitive g against the lanes of m; keeps each lane's closer hit
 // (Hit_Closer). Returns the lanes whose hit changed.
 template <int N, unsigned kTypes, bool kFast>
-inline vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
+CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                      HitPacket<N>& H, vbool<N> m)
 {
   vfloat<N> t, u(0.0f), v(0.0f);
@@ -133,7 +172,7 @@ inline vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, con
 
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
-inline void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
+CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
                             int anyHit, StatsSum& st)
 {
   struct Entry {
@@ -147,8 +186,7 @@ inline void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPac
   const std::uint32_t* refs = sc.refs;
   unsigned done = 0;  // occlusion: lanes with an occluder
   vfloat<N> tEnter;
-  vbool<N> m = active & Box_IntersectRays<kFast, N>(nodes[0].bmin, nodes[0].bmax, P.org, P.inv, P.invNeg, P.tmin,
-                                                     H.t, tEnter);
+  vbool<N> m = active & PacketBox_Intersect<N, kFast>(nodes[0], P, H.t, tEnter);
   unsigned bits = m.Bits();
   if (!bits) return;
   const unsigned activeBits = active.Bits();
@@ -175,10 +213,8 @@ inline void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPac
     } else {
       const std::uint32_t c0 = n.first, c1 = n.first + 1;
       vfloat<N> t0, t1;
-      const vbool<N> h0 =
-          m & Box_IntersectRays<kFast, N>(nodes[c0].bmin, nodes[c0].bmax, P.org, P.inv, P.invNeg, P.tmin, H.t, t0);
-      const vbool<N> h1 =
-          m & Box_IntersectRays<kFast, N>(nodes[c1].bmin, nodes[c1].bmax, P.org, P.inv, P.invNeg, P.tmin, H.t, t1);
+      const vbool<N> h0 = m & PacketBox_Intersect<N, kFast>(nodes[c0], P, H.t, t0);
+      const vbool<N> h1 = m & PacketBox_Intersect<N, kFast>(nodes[c1], P, H.t, t1);
       const unsigned b0 = h0.Bits(), b1 = h1.Bits();
       if (b0 && b1) {
         const unsigned both = b0 & b1;
@@ -230,16 +266,16 @@ void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
   StatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
-    Ray rays[N];
+    const RayRecord* recs[N];
     std::uint32_t idx[N];
     for (int l = 0; l < count; ++l) {
       idx[l] = RayIndex(job, p + std::size_t(l));
-      Ray_Init(&rays[l], &job.rays[idx[l]]);
+      recs[l] = &job.rays[idx[l]];
     }
-    for (int l = count; l < N; ++l) rays[l] = rays[0];
+    for (int l = count; l < N; ++l) recs[l] = recs[0];
     RayPacket<N> P;
     HitPacket<N> H;
-    RayPacket_Init<N>(P, H, rays);
+    RayPacket_Init<N>(P, H, recs);
     const vbool<N> active = vbool<N>::FromBits((1u << count) - 1u);
     BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, active, job.occlusion, st);
     alignas(32) float t[N], u[N], v[N];

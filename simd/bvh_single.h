@@ -29,7 +29,7 @@ struct PackRay {
 };
 
 template <int K>
-inline void PackRay_Init(PackRay<K>& pr, const Ray& r)
+CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
 {
   pr.k[0] = r.kx;
   pr.k[1] = r.ky;
@@ -47,7 +47,7 @@ inline void PackRay_Init(PackRay<K>& pr, const Ray& r)
 
 // Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit changed.
 template <int K>
-inline bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit)
+CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit)
 {
   if (None(ok)) return false;
   const float best = HMin(Select(ok, t, vfloat<K>(__builtin_inff())));
@@ -62,7 +62,7 @@ inline bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, cons
 }
 
 template <int K>
-inline vbool<K> Pack_Valid(const std::uint32_t* g)
+CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
 {
   return !(vint<K>::Load(g) == vint<K>(static_cast<int>(CR_NO_HIT)));
 }
@@ -70,7 +70,7 @@ inline vbool<K> Pack_Valid(const std::uint32_t* g)
 // The leaf's packs, type by type. Returns true when the hit changed
 // (occlusion: as soon as it does).
 template <int K, unsigned kTypes, bool kFast, bool kStats>
-inline bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
+CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
                                int anyHit, StatsSum& st)
 {
   bool changed = false;
@@ -145,7 +145,7 @@ inline bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, cons
 
 // Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
-inline void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
+CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
 {
   struct Entry {
     std::uint32_t ref;
@@ -178,8 +178,7 @@ inline void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int
         farP[a] = nearHi[a] ? n.lower[a] : n.upper[a];
       }
       vfloat<N> tE;
-      const vbool<N> used = !(vint<N>::Load(n.child) == vint<N>(static_cast<int>(kWideEmpty)));
-      unsigned bits = (used & Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(hit.t), tE)).Bits();
+      unsigned bits = Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(hit.t), tE).Bits();
       if (bits) {
         const int i0 = LowestBit(bits);
         bits &= bits - 1;

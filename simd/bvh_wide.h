@@ -18,10 +18,13 @@
 namespace cr::simd {
 
 inline constexpr std::uint32_t kWideLeafFlag = 0x80000000u;  // child = kWideLeafFlag | leaf index
-inline constexpr std::uint32_t kWideEmpty = 0xFFFFFFFFu;     // unused child slot (box is empty too)
+// Unused child slots point at leaf 0, which holds nothing, and have an empty
+// box, which no slab test accepts; so the traversal needs no slot mask (a ray
+// with a NaN component, which every slab test accepts, visits the empty leaf).
+inline constexpr std::uint32_t kWideEmptyLeaf = kWideLeafFlag | 0u;
 
 // N-wide node: 28 N bytes (112 for BVH4, 224 for BVH8). Unused slots have
-// lower = +inf, upper = -inf, which no slab test accepts, and child = kWideEmpty.
+// lower = +inf, upper = -inf and child = kWideEmptyLeaf.
 template <int N>
 struct alignas(4 * N) WideNode {
   float lower[3][N];

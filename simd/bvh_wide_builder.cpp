@@ -150,7 +150,7 @@ struct Collapser {
         w.lower[a][i] = used ? bvh.nodes[kids[i]].bmin[a] : INFINITY;
         w.upper[a][i] = used ? bvh.nodes[kids[i]].bmax[a] : -INFINITY;
       }
-      w.child[i] = used ? child[i] : kWideEmpty;
+      w.child[i] = used ? child[i] : kWideEmptyLeaf;
     }
     return self;
   }
@@ -162,6 +162,7 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const Scene& scene, const
   auto out = std::make_unique<WideBVH<N, K>>();
   out->width = N;
   out->packWidth = K;
+  out->leaves.push_back(WideLeaf{});  // leaf 0: the empty leaf of unused slots
   if (bvh.refs.empty()) {
     // No primitives: a root with no children, which no ray enters.
     WideNode<N> root;
@@ -170,7 +171,7 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const Scene& scene, const
         root.lower[a][i] = INFINITY;
         root.upper[a][i] = -INFINITY;
       }
-      root.child[i] = kWideEmpty;
+      root.child[i] = kWideEmptyLeaf;
     }
     out->nodes.push_back(root);
     return out;

@@ -16,7 +16,7 @@ template <int N>
 using V3 = vfloat<N>[3];
 
 template <int N>
-inline vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
+CR_SIMD_INLINE vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
 {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
@@ -27,7 +27,7 @@ inline vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
 // plane-parallel ray) as fmax/fmin do; the far distance gets Ize's factor
 // 1 + 2 gamma(3) unless kFast. Writes the entry distance.
 template <bool kFast, int N>
-inline vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], vfloat<N> tmin, vfloat<N> tmax,
+CR_SIMD_INLINE vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], vfloat<N> tmin, vfloat<N> tmax,
                            vfloat<N>& tEnter)
 {
   vfloat<N> boxNear(-__builtin_inff()), boxFar(__builtin_inff());
@@ -45,7 +45,7 @@ inline vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], vfloat<N>
 // Packet form: one box, a ray per lane (near/far chosen per lane by the sign
 // of inv, as Box_Intersect does).
 template <bool kFast, int N>
-inline vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, const vfloat<N> org[3],
+CR_SIMD_INLINE vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, const vfloat<N> org[3],
                                   const vfloat<N> inv[3], const vbool<N> invNeg[3], vfloat<N> tmin, vfloat<N> tmax,
                                   vfloat<N>& tEnter)
 {
@@ -62,7 +62,7 @@ inline vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, const vf
 // Single-ray form: N boxes structure-of-arrays (nearPlane[a] is bmax[a] when
 // the ray's inv[a] < 0, else bmin[a]; farPlane the other), one ray broadcast.
 template <bool kFast, int N>
-inline vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], const float* const farPlane[3],
+CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], const float* const farPlane[3],
                                    const vfloat<N> org[3], const vfloat<N> inv[3], vfloat<N> tmin, vfloat<N> tmax,
                                    vfloat<N>& tEnter)
 {
@@ -76,7 +76,7 @@ inline vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], const float*
 
 // Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller first.
 template <int N>
-inline void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0, vfloat<N>& t1)
+CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0, vfloat<N>& t1)
 {
   const vfloat<N> q = -(bh + CopySign(Sqrt(disc), bh));
   const vfloat<N> r0 = q / a;
@@ -87,7 +87,7 @@ inline void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> d
 
 // Sphere_Intersect: nearest root in [tmin, tmax]. f = org - center.
 template <bool kFast, int N>
-inline vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], vfloat<N> rad, vfloat<N> tmin,
+CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], vfloat<N> rad, vfloat<N> tmin,
                                   vfloat<N> tmax, vfloat<N>& tHit)
 {
   const vfloat<N> a = Dot3N<N>(dir, dir);
@@ -120,7 +120,7 @@ inline vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], 
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
 template <int N>
-inline vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
+CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
                                      const vfloat<N> s[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
                                      vfloat<N>& uHit, vfloat<N>& vHit)
 {
@@ -148,7 +148,7 @@ inline vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3],
 // Comparisons keep the scalar code's NaN behaviour; a NaN t passes its range
 // test there and is then refused by Hit_Closer, so it is refused here.
 template <int N>
-inline vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
+CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
                                          const vfloat<N> org[3], const vfloat<N> dir[3], vfloat<N> tmin,
                                          vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit, vfloat<N>& vHit)
 {
@@ -183,7 +183,7 @@ inline vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vfloat<N> 
 // Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
 // dl = org - base.
 template <bool kFast, int N>
-inline vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3], vfloat<N> H,
+CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3], vfloat<N> H,
                                 vfloat<N> r0, vfloat<N> k, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
 {
   const vfloat<N> zero(0.0f);

@@ -22,6 +22,7 @@
 #include "simd/bvh_wide_builder.h"
 #include "simd/isa.h"
 #include "simd/ray_coherence.h"
+#include "simd/ray_order.h"
 #include "simd/simd_kernels.h"
 #include "trace/tracer.h"
 
@@ -119,6 +120,13 @@ class SimdTracer final : public Tracer {
       return;
     }
     const KernelFn fn = usedPacket_ ? packetFn_ : singleFn_;
+    // Packets of primary rays cover compact image tiles (4x2 or 2x2 pixels)
+    // rather than row segments when the set is a row-major image.
+    std::vector<std::uint32_t> order;
+    if (usedPacket_) {
+      const int w = DetectImageWidth(rays);
+      if (w > 0) order = TileOrder(rays.size(), w, width_ == 8 ? 4 : 2, 2);
+    }
     // Blocks of whole packets; small enough to balance, large enough to
     // amortise the scheduling.
     const std::size_t unit = usedPacket_ ? std::size_t(width_) : 1;
@@ -129,6 +137,7 @@ class SimdTracer final : public Tracer {
       KernelJob job;
       job.rays = rays.data();
       job.hits = hits.data();
+      job.order = order.empty() ? nullptr : order.data();
       job.begin = r.begin() * unit;
       job.end = std::min(r.end() * unit, rays.size());
       job.occlusion = occlusion ? 1 : 0;

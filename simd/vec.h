@@ -25,6 +25,10 @@
 
 #include <cstdint>
 
+// The wrappers and the lane-wise kernels are small and hot: always inline
+// them (GCC otherwise keeps some intersectors out of line in the traversal).
+#define CR_SIMD_INLINE inline __attribute__((always_inline))
+
 namespace cr::simd::CR_SIMD_NS {
 
 template <int N>

@@ -2,11 +2,13 @@
 // backend: every SPD scene x ray kind x ISA this CPU has x variant, 0 wrong,
 // and the scalar backend's primitive ids (closest hits: the same t to 2 ulp;
 // only exact ties may name another primitive, and they are counted).
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
 #include "core/error.h"
 #include "simd/isa.h"
+#include "simd/ray_order.h"
 #include "test_util.h"
 
 using namespace cr;
@@ -264,4 +266,25 @@ TEST_CASE("simd: a scene without primitives answers misses")
       }
     }
   }
+}
+
+TEST_CASE("simd: packet formation finds the image of primary rays and tiles it")
+{
+  const Scene& scene = test::CachedScene(test::SpdPath("gears"));
+  RayGenOptions g;
+  g.kind = RayKind::Primary;
+  g.width = 24;
+  g.height = 10;
+  const auto primary = GenerateRays(scene, test::CachedReference(scene), g);
+  CHECK(simd::DetectImageWidth(primary) == 24);
+  CHECK(simd::DetectImageWidth(test::MakeRays(scene, RayKind::Diffuse, 16)) == 0);
+  CHECK(simd::DetectImageWidth(test::MakeRays(scene, RayKind::Random, 16)) == 0);
+  const auto order = simd::TileOrder(primary.size(), 24, 4, 2);
+  REQUIRE(order.size() == primary.size());
+  // A permutation whose first packet is the 4x2 tile at the top left.
+  std::vector<std::uint32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 0; i < sorted.size(); ++i) CHECK(sorted[i] == i);
+  const std::uint32_t firstTile[8] = {0, 1, 2, 3, 24, 25, 26, 27};
+  for (int i = 0; i < 8; ++i) CHECK(order[std::size_t(i)] == firstTile[i]);
 }

@@ -378,6 +378,13 @@ TEST_CASE("simd intersectors: slab tests with zero directions, origins on planes
             Compare(ScalarBox(lo, hi, lanes[std::size_t(l)], fast), out[std::size_t(l)], false, tally, "packet box",
                     lanes[std::size_t(l)], 0);
         }
+        // Packet form with one ray in every lane (the packet's same-signs path).
+        for (const RayRecord& r : rays) {
+          std::vector<RayRecord> lanes(std::size_t(pr.width), r);
+          pr.packetBox(lo, hi, lanes.data(), fast, out.data());
+          const ProbeResult want = ScalarBox(lo, hi, r, fast);
+          for (int l = 0; l < pr.width; ++l) Compare(want, out[std::size_t(l)], false, tally, "uniform box", r, 0);
+        }
         // Single-ray form: the box in every child slot of one node.
         std::vector<float> los(std::size_t(3 * pr.width)), his(std::size_t(3 * pr.width));
         for (int a = 0; a < 3; ++a)

@@ -1,0 +1,65 @@
+#include "simd/ray_order.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace cr::simd {
+
+namespace {
+
+double Diff(const RayRecord& a, const RayRecord& b, int axis) { return double(b.dir[axis]) - double(a.dir[axis]); }
+
+// |(b - a) - step| relative to |step|, in directions.
+double StepError(const RayRecord& a, const RayRecord& b, const double step[3], double stepLen)
+{
+  double e = 0.0;
+  for (int k = 0; k < 3; ++k) e = std::max(e, std::fabs(Diff(a, b, k) - step[k]));
+  return e / stepLen;
+}
+
+}  // namespace
+
+int DetectImageWidth(const std::vector<RayRecord>& rays)
+{
+  const std::size_t n = rays.size();
+  if (n < 16) return 0;
+  // One origin (compare a sample).
+  for (std::size_t i = 0; i < n; i += 1 + n / 64)
+    if (std::memcmp(rays[i].org, rays[0].org, sizeof rays[0].org) != 0) return 0;
+  double step[3];
+  double stepLen = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    step[k] = Diff(rays[0], rays[1], k);
+    stepLen = std::max(stepLen, std::fabs(step[k]));
+  }
+  if (!(stepLen > 0.0)) return 0;
+  constexpr double kTol = 0.25;  // row steps agree to float rounding; the wrap is a jump of many steps
+  std::size_t w = 1;
+  while (w < n - 1 && StepError(rays[w], rays[w + 1], step, stepLen) < kTol) ++w;
+  ++w;  // rays[w - 1] -> rays[w] is the first wrap
+  if (w < 2 || w >= n || n % w != 0) return 0;
+  // The same wrap at the end of a few other rows, and steady steps inside them.
+  const std::size_t h = n / w;
+  for (std::size_t y = 1; y < h; y += 1 + h / 8) {
+    const std::size_t row = y * w;
+    if (StepError(rays[row], rays[row + 1], step, stepLen) >= kTol) return 0;
+    if (StepError(rays[row - 1], rays[row], step, stepLen) < kTol) return 0;
+  }
+  return static_cast<int>(w);
+}
+
+std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tileW, int tileH)
+{
+  const std::size_t w = std::size_t(imageWidth), h = nRays / w;
+  std::vector<std::uint32_t> order;
+  order.reserve(nRays);
+  for (std::size_t ty = 0; ty < h; ty += std::size_t(tileH))
+    for (std::size_t tx = 0; tx < w; tx += std::size_t(tileW))
+      for (std::size_t y = ty; y < std::min(h, ty + std::size_t(tileH)); ++y)
+        for (std::size_t x = tx; x < std::min(w, tx + std::size_t(tileW)); ++x)
+          order.push_back(static_cast<std::uint32_t>(y * w + x));
+  return order;
+}
+
+}  // namespace cr::simd
