@@ -24,6 +24,7 @@ struct RayPacket {
   vbool<N> invNeg[3];  // inv < 0: the near plane is bmax
   vfloat<N> tmin;
   vfloat<N> s[3];     // shear constants sx, sy, sz
+  vint<N> k[3];       // kx, ky, kz
   vint<N> sel[3];     // ComponentSelector of kx, ky, kz
   vfloat<N> orgK[3];  // org[kx], org[ky], org[kz]
   // When every lane has the same direction signs (coherent packets), the
@@ -80,10 +81,12 @@ CR_SIMD_INLINE void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const RayRe
   p.s[0] = pick(dir, kx) / dz;
   p.s[1] = pick(dir, ky) / dz;
   p.s[2] = vfloat<N>(1.0f) / dz;
-  const vint<N> k[3] = {kx, ky, kz};
+  p.k[0] = kx;
+  p.k[1] = ky;
+  p.k[2] = kz;
   for (int j = 0; j < 3; ++j) {
-    p.sel[j] = ComponentSelector(k[j]);
-    p.orgK[j] = pick(org, k[j]);
+    p.sel[j] = ComponentSelector(p.k[j]);
+    p.orgK[j] = pick(org, p.k[j]);
   }
   p.sameSigns = true;
   for (int a = 0; a < 3; ++a) {

@@ -14,6 +14,7 @@
 // primitives of every pack tested.
 #pragma once
 
+#include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
 
 namespace cr::simd::CR_SIMD_NS {
@@ -223,19 +224,58 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
   }
 }
 
+// Traces positions [job.begin, job.end) one ray at a time. Rays are prepared
+// N at a time by the packet's vectorised Ray_Init (RayPacket_Init), which
+// has no data-dependent branches, unlike the scalar Ray_Init that an
+// incoherent ray set would make mispredict on every ray.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
 void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   const PrimView pv = MakePrimView(sc);
   StatsSum st;
-  for (std::size_t p = job.begin; p < job.end; ++p) {
-    const std::uint32_t i = RayIndex(job, p);
-    Ray ray;
-    Ray_Init(&ray, &job.rays[i]);
-    Hit hit;
-    Hit_Init(&hit, &ray);
-    BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, job.occlusion, st);
-    job.hits[i] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    for (int l = 0; l < count; ++l) {
+      idx[l] = RayIndex(job, p + std::size_t(l));
+      recs[l] = &job.rays[idx[l]];
+    }
+    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    alignas(32) float org[3][N], dir[3][N], inv[3][N], s[3][N], tmin[N], tmax[N];
+    alignas(32) std::uint32_t k[3][N];
+    for (int a = 0; a < 3; ++a) {
+      P.org[a].Store(org[a]);
+      P.dir[a].Store(dir[a]);
+      P.inv[a].Store(inv[a]);
+      P.s[a].Store(s[a]);
+      P.k[a].Store(k[a]);
+    }
+    P.tmin.Store(tmin);
+    H.t.Store(tmax);
+    for (int l = 0; l < count; ++l) {
+      Ray ray;
+      for (int a = 0; a < 3; ++a) {
+        ray.org[a] = org[a][l];
+        ray.dir[a] = dir[a][l];
+        ray.inv[a] = inv[a][l];
+      }
+      ray.tmin = tmin[l];
+      ray.tmax = tmax[l];
+      ray.sx = s[0][l];
+      ray.sy = s[1][l];
+      ray.sz = s[2][l];
+      ray.kx = static_cast<int>(k[0][l]);
+      ray.ky = static_cast<int>(k[1][l]);
+      ray.kz = static_cast<int>(k[2][l]);
+      Hit hit;
+      Hit_Init(&hit, &ray);
+      BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, job.occlusion, st);
+      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    }
   }
   if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
 }

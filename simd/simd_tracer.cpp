@@ -47,6 +47,12 @@ Variant ParseVariant(const std::string& s)
 // Packets pay off when most groups of consecutive rays share a direction
 // cone (docs/SIMD.md: primary and shadow rays yes, diffuse and random no).
 constexpr double kAutoPacketFraction = 0.5;
+// Incoherent sets: a pilot of 2 x 8 blocks of 512 rays (8192 rays) decides,
+// when the set is large enough for the pilot to be a small part of it.
+// Blocks this long keep the cache reuse of consecutive rays that the full
+// run has (with 64-ray blocks the pilot favoured single rays on shadow rays
+// that packets trace 1.5x faster); measurements in docs/SIMD.md.
+constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
 
 struct IsaEntry {
   KernelFn (*packet)(const KernelKey&);
@@ -110,48 +116,39 @@ class SimdTracer final : public Tracer {
   {
     hits.resize(rays.size());
     traced_ = true;
-    usedPacket_ = variant_ == Variant::Packet ||
-                  (variant_ == Variant::Auto && SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction);
     const bool wantStats = config_.stats && stats;
+    KernelStats sum;
     if (!packetFn_) {
       // No primitives: every ray misses.
       for (auto& h : hits) h = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
-      if (wantStats) stats->rays += rays.size();
-      return;
-    }
-    const KernelFn fn = usedPacket_ ? packetFn_ : singleFn_;
-    // Packets of primary rays cover compact image tiles (4x2 or 2x2 pixels)
-    // rather than row segments when the set is a row-major image.
-    std::vector<std::uint32_t> order;
-    if (usedPacket_) {
-      const int w = DetectImageWidth(rays);
-      if (w > 0) order = TileOrder(rays.size(), w, width_ == 8 ? 4 : 2, 2);
-    }
-    // Blocks of whole packets; small enough to balance, large enough to
-    // amortise the scheduling.
-    const std::size_t unit = usedPacket_ ? std::size_t(width_) : 1;
-    const std::size_t nUnits = (rays.size() + unit - 1) / unit;
-    const std::size_t grain = usedPacket_ ? 16 : 64;
-    tbb::enumerable_thread_specific<KernelStats> local;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
-      KernelJob job;
-      job.rays = rays.data();
-      job.hits = hits.data();
-      job.order = order.empty() ? nullptr : order.data();
-      job.begin = r.begin() * unit;
-      job.end = std::min(r.end() * unit, rays.size());
-      job.occlusion = occlusion ? 1 : 0;
-      job.stats = wantStats ? &local.local() : nullptr;
-      fn(sc_, job);
-    });
-    if (wantStats) {
-      for (const KernelStats& s : local) {
-        stats->rays += s.rays;
-        stats->nIT += s.nIT;
-        stats->nTS += s.nTS;
-        stats->nLeaves += s.nLeaves;
-        stats->nEmptyLeaves += s.nEmptyLeaves;
+      sum.rays = rays.size();
+    } else {
+      // order: the positions still to trace (all rays when empty).
+      std::vector<std::uint32_t> order;
+      if (variant_ == Variant::Packet)
+        usedPacket_ = true;
+      else if (variant_ == Variant::Single)
+        usedPacket_ = false;
+      else if (SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction)
+        usedPacket_ = true;
+      else if (rays.size() < kPilotMinRays)
+        usedPacket_ = false;
+      else
+        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, order);
+      if (usedPacket_ && order.empty()) {
+        // Packets of primary rays cover compact image tiles (4x2 or 2x2
+        // pixels) rather than row segments when the set is a row-major image.
+        const int w = DetectImageWidth(rays);
+        if (w > 0) order = TileOrder(rays.size(), w, width_ == 8 ? 4 : 2, 2);
       }
+      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, hits, order, occlusion, wantStats ? &sum : nullptr);
+    }
+    if (wantStats) {
+      stats->rays += sum.rays;
+      stats->nIT += sum.nIT;
+      stats->nTS += sum.nTS;
+      stats->nLeaves += sum.nLeaves;
+      stats->nEmptyLeaves += sum.nEmptyLeaves;
     }
   }
 
@@ -177,6 +174,81 @@ class SimdTracer final : public Tracer {
   int width_ = 4;
   bool usedPacket_ = false;
   bool traced_ = false;
+
+  // Traces positions [0, n) of `order` (or of the rays themselves when order
+  // is empty), parallel over blocks of whole packets: small enough to
+  // balance the threads, large enough to amortise the scheduling.
+  void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits,
+           const std::vector<std::uint32_t>& order, bool occlusion, KernelStats* sum) const
+  {
+    const std::size_t n = order.empty() ? rays.size() : order.size();
+    const std::size_t unit = packet ? std::size_t(width_) : 1;
+    const std::size_t nUnits = (n + unit - 1) / unit;
+    const std::size_t grain = packet ? 16 : 64;
+    tbb::enumerable_thread_specific<KernelStats> local;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      KernelJob job;
+      job.rays = rays.data();
+      job.hits = hits.data();
+      job.order = order.empty() ? nullptr : order.data();
+      job.begin = r.begin() * unit;
+      job.end = std::min(r.end() * unit, n);
+      job.occlusion = occlusion ? 1 : 0;
+      job.stats = sum ? &local.local() : nullptr;
+      fn(sc_, job);
+    });
+    if (sum) {
+      for (const KernelStats& s : local) Add(*sum, s);
+    }
+  }
+
+  static void Add(KernelStats& a, const KernelStats& b)
+  {
+    a.rays += b.rays;
+    a.nIT += b.nIT;
+    a.nTS += b.nTS;
+    a.nLeaves += b.nLeaves;
+    a.nEmptyLeaves += b.nEmptyLeaves;
+  }
+
+  // `auto` on an incoherent ray set decides by measurement: blocks of rays
+  // spread over the whole set are traced alternately with packets and one
+  // ray at a time (for real: their answers are kept), and the variant that
+  // took less time traces the rest, whose positions go to `rest`. Which
+  // variant wins depends on the scene as much as on the rays (docs/SIMD.md:
+  // on random rays packets win on balls and tree, single rays on gears and
+  // teapot), so no ray-set statistic predicts it as well.
+  bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, KernelStats* sum,
+             std::vector<std::uint32_t>& rest) const
+  {
+    const std::size_t nBlocks = rays.size() / kPilotBlock;
+    const std::size_t nPilot = std::min<std::size_t>(2 * kPilotBlocksEach, nBlocks);
+    const std::size_t stride = nBlocks / nPilot;
+    std::vector<char> isPilot(nBlocks, 0);
+    double seconds[2] = {0.0, 0.0};
+    KernelStats pilotStats;
+    for (std::size_t i = 0; i < nPilot; ++i) {
+      const std::size_t b = i * stride;
+      isPilot[b] = 1;
+      KernelJob job;
+      job.rays = rays.data();
+      job.hits = hits.data();
+      job.begin = b * kPilotBlock;
+      job.end = job.begin + kPilotBlock;
+      job.occlusion = occlusion ? 1 : 0;
+      job.stats = sum ? &pilotStats : nullptr;
+      const int single = static_cast<int>(i & 1);
+      const auto t0 = std::chrono::steady_clock::now();
+      (single ? singleFn_ : packetFn_)(sc_, job);
+      seconds[single] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    if (sum) Add(*sum, pilotStats);
+    rest.clear();
+    rest.reserve(rays.size() - nPilot * kPilotBlock);
+    for (std::size_t r = 0; r < rays.size(); ++r)
+      if (r / kPilotBlock >= nBlocks || !isPilot[r / kPilotBlock]) rest.push_back(static_cast<std::uint32_t>(r));
+    return seconds[0] <= seconds[1];
+  }
 };
 
 // What the SIMD backend hands to the scalar one, named in VariantName.
