@@ -288,3 +288,30 @@ TEST_CASE("simd: packet formation finds the image of primary rays and tiles it")
   const std::uint32_t firstTile[8] = {0, 1, 2, 3, 24, 25, 26, 27};
   for (int i = 0; i < 8; ++i) CHECK(order[std::size_t(i)] == firstTile[i]);
 }
+
+TEST_CASE("simd: auto on a large incoherent set (pilot blocks, then the rest) answers every ray once")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) return;
+  const Scene& scene = test::CachedScene(test::SpdPath("balls"));
+  const auto rays = test::MakeRays(scene, RayKind::Diffuse, 260);  // 67600 rays: above the pilot threshold
+  TraceConfig scalarCfg;
+  scalarCfg.backend = Backend::Scalar;
+  const auto scalarHits = TraceWith(scene, scalarCfg, rays, false);
+  for (const std::string& isa : isas) {
+    TraceConfig cfg;
+    cfg.backend = Backend::Simd;
+    cfg.isa = isa;
+    cfg.stats = true;
+    auto tracer = CreateTracer(scene, cfg);
+    std::vector<HitRecord> hits(rays.size(), HitRecord{-1.0f, 12345u, -1.0f, -1.0f});
+    TraceStatsSum st;
+    tracer->Trace(rays, hits, false, &st);
+    INFO(isa, " ", tracer->VariantName());
+    CHECK((tracer->VariantName() == isa + " packet" || tracer->VariantName() == isa + " single"));
+    CHECK(st.rays == rays.size());
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < hits.size(); ++i) same += std::memcmp(&hits[i], &scalarHits[i], sizeof(HitRecord)) == 0;
+    CHECK(same == rays.size());
+  }
+}
