@@ -53,10 +53,10 @@ class WideBVH final : public WideBVHBase {
   }
 };
 
-// Collapses `bvh` (host/accel/bvh_builder.cpp) into N-wide nodes: each wide
-// node takes its binary node's two children and keeps opening the child of
-// largest surface area until it has N (Wald et al. 2008). Leaves keep their
-// binary references, repacked K per pack and type. Supported (N, K): (4, 4),
+// Collapses `bvh` (host/accel/bvh_builder.cpp) into N-wide nodes, choosing
+// which binary nodes become wide nodes so that the sum of their surface
+// areas is least (a dynamic programme, bvh_wide_builder.cpp). Leaves keep
+// their binary references, repacked K per pack and type. Supported (N, K): (4, 4),
 // (8, 4), (8, 8); others throw RuntimeError.
 std::unique_ptr<WideBVHBase> BuildWideBVH(const BVHData& bvh, const Scene& scene, const std::vector<ConeData>& cones,
                                           int width, int packWidth);
