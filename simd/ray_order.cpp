@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include <tbb/parallel_for.h>
+
 namespace cr::simd {
 
 namespace {
@@ -51,14 +53,18 @@ int DetectImageWidth(const std::vector<RayRecord>& rays)
 
 std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tileW, int tileH)
 {
-  const std::size_t w = std::size_t(imageWidth), h = nRays / w;
-  std::vector<std::uint32_t> order;
-  order.reserve(nRays);
-  for (std::size_t ty = 0; ty < h; ty += std::size_t(tileH))
-    for (std::size_t tx = 0; tx < w; tx += std::size_t(tileW))
-      for (std::size_t y = ty; y < std::min(h, ty + std::size_t(tileH)); ++y)
-        for (std::size_t x = tx; x < std::min(w, tx + std::size_t(tileW)); ++x)
-          order.push_back(static_cast<std::uint32_t>(y * w + x));
+  const std::size_t w = std::size_t(imageWidth), h = nRays / w, th = std::size_t(tileH), tw = std::size_t(tileW);
+  std::vector<std::uint32_t> order(nRays);
+  // Tile row r fills positions [r * th * w, ...): independent, so in parallel
+  // (this runs before every packet trace of an image and would otherwise be
+  // a serial part of the two-thread run).
+  tbb::parallel_for(std::size_t(0), (h + th - 1) / th, [&](std::size_t r) {
+    std::size_t pos = r * th * w;
+    const std::size_t y0 = r * th, y1 = std::min(h, y0 + th);
+    for (std::size_t tx = 0; tx < w; tx += tw)
+      for (std::size_t y = y0; y < y1; ++y)
+        for (std::size_t x = tx; x < std::min(w, tx + tw); ++x) order[pos++] = static_cast<std::uint32_t>(y * w + x);
+  });
   return order;
 }
 
