@@ -118,7 +118,7 @@ CR_SIMD_INLINE vbool<N> PacketBox_Intersect(const BVHNode& node, const RayPacket
 // (Hit_Closer). Returns the lanes whose hit changed.
 template <int N, unsigned kTypes, bool kFast>
 CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
-                                     HitPacket<N>& H, vbool<N> m)
+                                             HitPacket<N>& H, vbool<N> m)
 {
   vfloat<N> t, u(0.0f), v(0.0f);
   vbool<N> ok;
@@ -176,7 +176,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
-                            int anyHit, StatsSum& st)
+                                    int anyHit, StatsSum& st)
 {
   struct Entry {
     vfloat<N> t;  // each lane's entry distance

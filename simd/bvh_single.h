@@ -72,7 +72,7 @@ CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
 // (occlusion: as soon as it does).
 template <int K, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
-                               int anyHit, StatsSum& st)
+                                       int anyHit, StatsSum& st)
 {
   bool changed = false;
   if constexpr (kTypes & kSphereBit) {
@@ -133,8 +133,9 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
         dl[i] = pr.org[i] - vfloat<K>::Load(pk.base[i]);
         w[i] = vfloat<K>::Load(pk.w[i]);
       }
-      const vbool<K> ok = valid & Cone_IntersectN<kFast, K>(dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
-                                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t);
+      const vbool<K> ok =
+          valid & Cone_IntersectN<kFast, K>(dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
+                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t);
       if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
         changed = true;
         if (anyHit) return true;
@@ -224,6 +225,39 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
   }
 }
 
+// The lanes of a packet as scalar rays: what Ray_Init makes of each record.
+template <int N>
+CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>& H, Ray* rays)
+{
+  alignas(32) float org[3][N], dir[3][N], inv[3][N], s[3][N], tmin[N], tmax[N];
+  alignas(32) std::uint32_t k[3][N];
+  for (int a = 0; a < 3; ++a) {
+    P.org[a].Store(org[a]);
+    P.dir[a].Store(dir[a]);
+    P.inv[a].Store(inv[a]);
+    P.s[a].Store(s[a]);
+    P.k[a].Store(k[a]);
+  }
+  P.tmin.Store(tmin);
+  H.t.Store(tmax);
+  for (int l = 0; l < N; ++l) {
+    Ray& ray = rays[l];
+    for (int a = 0; a < 3; ++a) {
+      ray.org[a] = org[a][l];
+      ray.dir[a] = dir[a][l];
+      ray.inv[a] = inv[a][l];
+    }
+    ray.tmin = tmin[l];
+    ray.tmax = tmax[l];
+    ray.sx = s[0][l];
+    ray.sy = s[1][l];
+    ray.sz = s[2][l];
+    ray.kx = static_cast<int>(k[0][l]);
+    ray.ky = static_cast<int>(k[1][l]);
+    ray.kz = static_cast<int>(k[2][l]);
+  }
+}
+
 // Traces positions [job.begin, job.end) one ray at a time. Rays are prepared
 // N at a time by the packet's vectorised Ray_Init (RayPacket_Init), which
 // has no data-dependent branches, unlike the scalar Ray_Init that an
@@ -245,32 +279,10 @@ void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
-    alignas(32) float org[3][N], dir[3][N], inv[3][N], s[3][N], tmin[N], tmax[N];
-    alignas(32) std::uint32_t k[3][N];
-    for (int a = 0; a < 3; ++a) {
-      P.org[a].Store(org[a]);
-      P.dir[a].Store(dir[a]);
-      P.inv[a].Store(inv[a]);
-      P.s[a].Store(s[a]);
-      P.k[a].Store(k[a]);
-    }
-    P.tmin.Store(tmin);
-    H.t.Store(tmax);
+    Ray rays[N];
+    RayPacket_Extract<N>(P, H, rays);
     for (int l = 0; l < count; ++l) {
-      Ray ray;
-      for (int a = 0; a < 3; ++a) {
-        ray.org[a] = org[a][l];
-        ray.dir[a] = dir[a][l];
-        ray.inv[a] = inv[a][l];
-      }
-      ray.tmin = tmin[l];
-      ray.tmax = tmax[l];
-      ray.sx = s[0][l];
-      ray.sy = s[1][l];
-      ray.sz = s[2][l];
-      ray.kx = static_cast<int>(k[0][l]);
-      ray.ky = static_cast<int>(k[1][l]);
-      ray.kz = static_cast<int>(k[2][l]);
+      const Ray& ray = rays[l];
       Hit hit;
       Hit_Init(&hit, &ray);
       BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, job.occlusion, st);

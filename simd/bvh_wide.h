@@ -52,7 +52,7 @@ struct SpherePack {  // 20 K bytes
 
 template <int K>
 struct TrianglePack {  // 40 K bytes
-  float v[3][3][K];  // [vertex][axis][lane]
+  float v[3][3][K];    // [vertex][axis][lane]
   std::uint32_t g[K];
 };
 

@@ -116,8 +116,8 @@ struct Collapser {
   // A greedy top-down collapse (open the child of largest area until N)
   // leaves the bottom of a balanced tree in wide nodes of 2 leaves: 585 BVH8
   // nodes for tetra's 1023 interior nodes, where this gives 147.
-  std::vector<double> cost;          // C(n, j) at n * (N + 1) + j
-  std::vector<std::uint8_t> choice;  // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
+  std::vector<double> cost;             // C(n, j) at n * (N + 1) + j
+  std::vector<std::uint8_t> choice;     // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
   std::vector<std::uint8_t> rootSplit;  // i of W(n)
 
   static double Area(const BVHNode& b)

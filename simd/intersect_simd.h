@@ -28,7 +28,7 @@ CR_SIMD_INLINE vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
 // 1 + 2 gamma(3) unless kFast. Writes the entry distance.
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], vfloat<N> tmin, vfloat<N> tmax,
-                           vfloat<N>& tEnter)
+                                   vfloat<N>& tEnter)
 {
   vfloat<N> boxNear(-__builtin_inff()), boxFar(__builtin_inff());
   for (int a = 0; a < 3; ++a) {
@@ -46,8 +46,8 @@ CR_SIMD_INLINE vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], v
 // of inv, as Box_Intersect does).
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, const vfloat<N> org[3],
-                                  const vfloat<N> inv[3], const vbool<N> invNeg[3], vfloat<N> tmin, vfloat<N> tmax,
-                                  vfloat<N>& tEnter)
+                                          const vfloat<N> inv[3], const vbool<N> invNeg[3], vfloat<N> tmin,
+                                          vfloat<N> tmax, vfloat<N>& tEnter)
 {
   vfloat<N> n[3], f[3];
   for (int a = 0; a < 3; ++a) {
@@ -63,8 +63,8 @@ CR_SIMD_INLINE vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, 
 // the ray's inv[a] < 0, else bmin[a]; farPlane the other), one ray broadcast.
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], const float* const farPlane[3],
-                                   const vfloat<N> org[3], const vfloat<N> inv[3], vfloat<N> tmin, vfloat<N> tmax,
-                                   vfloat<N>& tEnter)
+                                           const vfloat<N> org[3], const vfloat<N> inv[3], vfloat<N> tmin,
+                                           vfloat<N> tmax, vfloat<N>& tEnter)
 {
   vfloat<N> n[3], f[3];
   for (int a = 0; a < 3; ++a) {
@@ -76,7 +76,8 @@ CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], cons
 
 // Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller first.
 template <int N>
-CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0, vfloat<N>& t1)
+CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0,
+                                     vfloat<N>& t1)
 {
   const vfloat<N> q = -(bh + CopySign(Sqrt(disc), bh));
   const vfloat<N> r0 = q / a;
@@ -88,7 +89,7 @@ CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfl
 // Sphere_Intersect: nearest root in [tmin, tmax]. f = org - center.
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], vfloat<N> rad, vfloat<N> tmin,
-                                  vfloat<N> tmax, vfloat<N>& tHit)
+                                          vfloat<N> tmax, vfloat<N>& tHit)
 {
   const vfloat<N> a = Dot3N<N>(dir, dir);
   const vfloat<N> bh = Dot3N<N>(f, dir);
@@ -121,8 +122,8 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
 template <int N>
 CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
-                                     const vfloat<N> s[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
-                                     vfloat<N>& uHit, vfloat<N>& vHit)
+                                             const vfloat<N> s[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
+                                             vfloat<N>& uHit, vfloat<N>& vHit)
 {
   const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
   const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
@@ -149,8 +150,8 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
 // test there and is then refused by Hit_Closer, so it is refused here.
 template <int N>
 CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
-                                         const vfloat<N> org[3], const vfloat<N> dir[3], vfloat<N> tmin,
-                                         vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit, vfloat<N>& vHit)
+                                                 const vfloat<N> org[3], const vfloat<N> dir[3], vfloat<N> tmin,
+                                                 vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit, vfloat<N>& vHit)
 {
   vfloat<N> e1[3], e2[3], tv[3], pv[3], qv[3];
   for (int i = 0; i < 3; ++i) {
@@ -183,8 +184,9 @@ CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vf
 // Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
 // dl = org - base.
 template <bool kFast, int N>
-CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3], vfloat<N> H,
-                                vfloat<N> r0, vfloat<N> k, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
+CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3],
+                                        vfloat<N> H, vfloat<N> r0, vfloat<N> k, vfloat<N> tmin, vfloat<N> tmax,
+                                        vfloat<N>& tHit)
 {
   const vfloat<N> zero(0.0f);
   vbool<N> miss = !(H > zero);

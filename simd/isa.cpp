@@ -12,9 +12,7 @@ bool IsaSupported(Isa isa)
     case Isa::Scalar: return true;
 #if defined(CELLRAY_SIMD_X86)
     case Isa::Sse4: __builtin_cpu_init(); return __builtin_cpu_supports("sse4.1");
-    case Isa::Avx2:
-      __builtin_cpu_init();
-      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    case Isa::Avx2: __builtin_cpu_init(); return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
     case Isa::Sse4:
     case Isa::Avx2: return false;

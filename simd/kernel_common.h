@@ -1,7 +1,9 @@
 // What every per-ISA kernel unit includes first: the wrappers, the scalar
-// ray and hit code of kernels/ (Ray_Init, Hit_Closer, Hit_ToRecord) compiled
-// inside the ISA namespace, and the lane-wise intersectors. Define
-// CR_SIMD_NS before including.
+// ray and hit code of kernels/ (Ray, Hit, Hit_Init, Hit_Closer, Hit_ToRecord)
+// compiled inside the ISA namespace, and the lane-wise intersectors. Define
+// CR_SIMD_NS before including. (Ray_Init itself is replaced by the
+// vectorised RayPacket_Init, which also keeps libstdc++'s out-of-line
+// std::fabs of a -O0 build out of these units.)
 #pragma once
 
 #include "kernels/types.h"
@@ -10,9 +12,9 @@
 
 namespace cr::simd::CR_SIMD_NS {
 typedef float real;
-// The scalar kernel helpers, so that rays are prepared and hits reported
-// exactly as the scalar backend does (only the ray and hit parts are used;
-// the scalar intersectors compile to nothing).
+// The scalar kernel helpers, so that hits are kept and reported exactly as
+// the scalar backend does (only the ray and hit parts are used; the scalar
+// intersectors compile to nothing).
 #include "kernels/intersect.h"
 }  // namespace cr::simd::CR_SIMD_NS
 

@@ -58,10 +58,10 @@ struct KernelJob {
 using KernelFn = void (*)(const KernelScene&, const KernelJob&);
 
 struct KernelKey {
-  unsigned types = 0;  // PrimTypeBits, 1..7
-  bool fast = false;   // Precision::Fast (else robust)
-  bool stats = false;  // counts Havran's measures
-  bool packet = false; // ray packets (else one ray at a time)
+  unsigned types = 0;   // PrimTypeBits, 1..7
+  bool fast = false;    // Precision::Fast (else robust)
+  bool stats = false;   // counts Havran's measures
+  bool packet = false;  // ray packets (else one ray at a time)
 };
 
 // Answer of one ray-primitive test, for the lane-by-lane unit tests.
@@ -75,7 +75,7 @@ struct ProbeResult {
 // ray against `width` primitives gs[] in one pack; g = CR_NO_HIT pads).
 // tmax is each ray's tmax. Box probes test box (lo, hi) against the ray(s).
 struct KernelProbes {
-  int width = 0;  // N of the packet and wide-node forms
+  int width = 0;      // N of the packet and wide-node forms
   int packWidth = 0;  // K of the primitive packs
   void (*packetPrim)(const KernelScene&, const RayRecord* rays, std::uint32_t g, bool fast, ProbeResult* out) = nullptr;
   void (*singlePrims)(const KernelScene&, const RayRecord& ray, const std::uint32_t* gs, bool fast,
@@ -85,16 +85,13 @@ struct KernelProbes {
                       ProbeResult* out) = nullptr;
 };
 
-// Widths of each ISA (N rays per packet = N children per wide node; K
-// primitives per pack).
-inline constexpr int kSse4Width = 4, kSse4PackWidth = 4;
-inline constexpr int kAvx2Width = 8, kAvx2PackWidth = 4;
-
-#define CR_DECLARE_SIMD_ISA(ns)                          \
-  namespace ns {                                         \
-  KernelFn SelectPacketKernel(const KernelKey& key);     \
-  KernelFn SelectSingleKernel(const KernelKey& key);     \
-  KernelProbes Probes();                                 \
+// Each ISA's kernels: Probes() also tells its widths (SSE4: N = 4, K = 4;
+// AVX2: N = 8, K = 4), from which the tracer builds the matching wide BVH.
+#define CR_DECLARE_SIMD_ISA(ns)                      \
+  namespace ns {                                     \
+  KernelFn SelectPacketKernel(const KernelKey& key); \
+  KernelFn SelectSingleKernel(const KernelKey& key); \
+  KernelProbes Probes();                             \
   }
 CR_DECLARE_SIMD_ISA(sse4)
 CR_DECLARE_SIMD_ISA(avx2)

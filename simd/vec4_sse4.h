@@ -22,7 +22,10 @@ struct vbool<4> {
 CR_SIMD_INLINE vbool<4> operator&(vbool<4> a, vbool<4> b) { return vbool<4>(_mm_and_ps(a.m, b.m)); }
 CR_SIMD_INLINE vbool<4> operator|(vbool<4> a, vbool<4> b) { return vbool<4>(_mm_or_ps(a.m, b.m)); }
 CR_SIMD_INLINE vbool<4> operator^(vbool<4> a, vbool<4> b) { return vbool<4>(_mm_xor_ps(a.m, b.m)); }
-CR_SIMD_INLINE vbool<4> operator!(vbool<4> a) { return vbool<4>(_mm_xor_ps(a.m, _mm_castsi128_ps(_mm_set1_epi32(-1)))); }
+CR_SIMD_INLINE vbool<4> operator!(vbool<4> a)
+{
+  return vbool<4>(_mm_xor_ps(a.m, _mm_castsi128_ps(_mm_set1_epi32(-1))));
+}
 // a and not b.
 CR_SIMD_INLINE vbool<4> AndNot(vbool<4> a, vbool<4> b) { return vbool<4>(_mm_andnot_ps(b.m, a.m)); }
 CR_SIMD_INLINE bool Any(vbool<4> a) { return _mm_movemask_ps(a.m) != 0; }
@@ -59,7 +62,10 @@ CR_SIMD_INLINE vbool<4> operator==(vfloat<4> a, vfloat<4> b) { return vbool<4>(_
 CR_SIMD_INLINE vbool<4> operator!=(vfloat<4> a, vfloat<4> b) { return vbool<4>(_mm_cmpneq_ps(a.v, b.v)); }
 CR_SIMD_INLINE vbool<4> IsNaN(vfloat<4> a) { return vbool<4>(_mm_cmpunord_ps(a.v, a.v)); }
 // m ? a : b, lane by lane.
-CR_SIMD_INLINE vfloat<4> Select(vbool<4> m, vfloat<4> a, vfloat<4> b) { return vfloat<4>(_mm_blendv_ps(b.v, a.v, m.m)); }
+CR_SIMD_INLINE vfloat<4> Select(vbool<4> m, vfloat<4> a, vfloat<4> b)
+{
+  return vfloat<4>(_mm_blendv_ps(b.v, a.v, m.m));
+}
 // minps/maxps: a < b ? a : b (a > b ? a : b); a NaN operand yields b.
 CR_SIMD_INLINE vfloat<4> Min(vfloat<4> a, vfloat<4> b) { return vfloat<4>(_mm_min_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<4> Max(vfloat<4> a, vfloat<4> b) { return vfloat<4>(_mm_max_ps(a.v, b.v)); }
@@ -101,7 +107,10 @@ struct vint<4> {
 };
 CR_SIMD_INLINE vint<4> operator+(vint<4> a, vint<4> b) { return vint<4>(_mm_add_epi32(a.v, b.v)); }
 CR_SIMD_INLINE vint<4> operator*(vint<4> a, vint<4> b) { return vint<4>(_mm_mullo_epi32(a.v, b.v)); }
-CR_SIMD_INLINE vbool<4> operator==(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmpeq_epi32(a.v, b.v))); }
+CR_SIMD_INLINE vbool<4> operator==(vint<4> a, vint<4> b)
+{
+  return vbool<4>(_mm_castsi128_ps(_mm_cmpeq_epi32(a.v, b.v)));
+}
 // Unsigned a < b.
 CR_SIMD_INLINE vbool<4> LessUnsigned(vint<4> a, vint<4> b)
 {

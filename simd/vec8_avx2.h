@@ -60,7 +60,10 @@ CR_SIMD_INLINE vbool<8> operator>=(vfloat<8> a, vfloat<8> b) { return vbool<8>(_
 CR_SIMD_INLINE vbool<8> operator==(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ)); }
 CR_SIMD_INLINE vbool<8> operator!=(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_NEQ_UQ)); }
 CR_SIMD_INLINE vbool<8> IsNaN(vfloat<8> a) { return vbool<8>(_mm256_cmp_ps(a.v, a.v, _CMP_UNORD_Q)); }
-CR_SIMD_INLINE vfloat<8> Select(vbool<8> m, vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_blendv_ps(b.v, a.v, m.m)); }
+CR_SIMD_INLINE vfloat<8> Select(vbool<8> m, vfloat<8> a, vfloat<8> b)
+{
+  return vfloat<8>(_mm256_blendv_ps(b.v, a.v, m.m));
+}
 CR_SIMD_INLINE vfloat<8> Min(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_min_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<8> Max(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_max_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<8> FMin(vfloat<8> a, vfloat<8> b) { return Select(IsNaN(b), a, Min(a, b)); }
@@ -99,7 +102,10 @@ struct vint<8> {
 };
 CR_SIMD_INLINE vint<8> operator+(vint<8> a, vint<8> b) { return vint<8>(_mm256_add_epi32(a.v, b.v)); }
 CR_SIMD_INLINE vint<8> operator*(vint<8> a, vint<8> b) { return vint<8>(_mm256_mullo_epi32(a.v, b.v)); }
-CR_SIMD_INLINE vbool<8> operator==(vint<8> a, vint<8> b) { return vbool<8>(_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v))); }
+CR_SIMD_INLINE vbool<8> operator==(vint<8> a, vint<8> b)
+{
+  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v)));
+}
 CR_SIMD_INLINE vbool<8> LessUnsigned(vint<8> a, vint<8> b)
 {
   const __m256i le = _mm256_cmpeq_epi32(_mm256_min_epu32(a.v, b.v), a.v);

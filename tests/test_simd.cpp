@@ -40,11 +40,11 @@ std::int64_t UlpDistance(float a, float b)
 }
 
 struct Comparison {
-  std::uint64_t differentPrim = 0;    // closest hit: other primitive, t not equal (a failure)
-  std::uint64_t exactTies = 0;        // closest hit: other primitive at exactly the same t
-  std::uint64_t tBeyond2Ulp = 0;      // same primitive, t more than 2 ulp apart (a failure)
-  std::uint64_t otherOccluder = 0;    // occlusion: both occluded, another occluder (allowed)
-  std::uint64_t occlusionDiffers = 0; // occlusion: occluded vs free (a failure)
+  std::uint64_t differentPrim = 0;     // closest hit: other primitive, t not equal (a failure)
+  std::uint64_t exactTies = 0;         // closest hit: other primitive at exactly the same t
+  std::uint64_t tBeyond2Ulp = 0;       // same primitive, t more than 2 ulp apart (a failure)
+  std::uint64_t otherOccluder = 0;     // occlusion: both occluded, another occluder (allowed)
+  std::uint64_t occlusionDiffers = 0;  // occlusion: occluded vs free (a failure)
   std::uint64_t firstBad = ~0ull;
 };
 
@@ -115,8 +115,8 @@ TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the referenc
             const auto r = test::CheckTracer(scene, cfg, rays, occlusion, &hits);
             const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
             INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant, ": ", r.wrong,
-                 " wrong of ", r.rays, "; vs scalar: ", c.differentPrim, " other prim, ", c.tBeyond2Ulp,
-                 " t > 2 ulp, ", c.occlusionDiffers, " occlusion differs (first ray ", c.firstBad, ")");
+                 " wrong of ", r.rays, "; vs scalar: ", c.differentPrim, " other prim, ", c.tBeyond2Ulp, " t > 2 ulp, ",
+                 c.occlusionDiffers, " occlusion differs (first ray ", c.firstBad, ")");
             CHECK(r.rays == rays.size());
             CHECK(r.wrong == 0);
             CHECK(c.differentPrim == 0);

@@ -39,8 +39,7 @@ using simd::ProbeResult;
 
 namespace {
 
-RayRecord MakeRay(float ox, float oy, float oz, float dx, float dy, float dz, float tmin = 0.0f,
-                  float tmax = INFINITY)
+RayRecord MakeRay(float ox, float oy, float oz, float dx, float dy, float dz, float tmin = 0.0f, float tmax = INFINITY)
 {
   return RayRecord{{ox, oy, oz}, tmin, {dx, dy, dz}, tmax};
 }
@@ -154,16 +153,17 @@ void Compare(const ProbeResult& want, const ProbeResult& got, bool compareUV, Ta
   if (!same) {
     ++tally.mismatches;
     if (tally.mismatches <= 5)
-      MESSAGE(fmt::format("{} g={} org=({:a},{:a},{:a}) dir=({:a},{:a},{:a}): scalar hit={} t={:a} u={:a} v={:a}; "
-                          "simd hit={} t={:a} u={:a} v={:a}",
-                          what, g, r.org[0], r.org[1], r.org[2], r.dir[0], r.dir[1], r.dir[2], want.hit, want.t,
-                          want.u, want.v, got.hit, got.t, got.u, got.v));
+      MESSAGE(
+          fmt::format("{} g={} org=({:a},{:a},{:a}) dir=({:a},{:a},{:a}): scalar hit={} t={:a} u={:a} v={:a}; "
+                      "simd hit={} t={:a} u={:a} v={:a}",
+                      what, g, r.org[0], r.org[1], r.org[2], r.dir[0], r.dir[1], r.dir[2], want.hit, want.t, want.u,
+                      want.v, got.hit, got.t, got.u, got.v));
   }
 }
 
 // Every ray against primitives [gBegin, gEnd) in both forms.
-Tally ProbePrims(const KernelProbes& pr, const ProbeScene& ps, const std::vector<RayRecord>& rays,
-                 std::uint32_t gBegin, std::uint32_t gEnd, bool fast)
+Tally ProbePrims(const KernelProbes& pr, const ProbeScene& ps, const std::vector<RayRecord>& rays, std::uint32_t gBegin,
+                 std::uint32_t gEnd, bool fast)
 {
   Tally tally;
   const bool uv = gBegin >= ps.sc.counts.nSpheres && gBegin < ps.sc.counts.nSpheres + ps.sc.counts.nTriangles;
@@ -278,12 +278,12 @@ TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
       rays.push_back(MakeRay(-5.0f, y, 0.0f, 1.0f, z0, z0));  // tangent when |y| = 1 (discriminant exactly 0)
       rays.push_back(MakeRay(0.0f, y, -5.0f, z0, 0.0f, 1.0f));
     }
-  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.3f, 0.4f, 0.5f));               // from the centre
-  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f));              // from the surface
-  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, -1.0f, 0.0f, 0.0f, 0.0f, 5.0f)); // leaving it
-  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f));               // zero direction
-  rays.push_back(MakeRay(1000.0f, 3000.0f, 0.0f, 0.0f, -0.0f, 1.0f));        // tangent to the far sphere
-  rays.push_back(MakeRay(3.0f, 0.75f, -10.0f, 0.0f, 0.0f, 1.0f));            // tangent to sphere 1
+  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.3f, 0.4f, 0.5f));                // from the centre
+  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f));               // from the surface
+  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, -1.0f, 0.0f, 0.0f, 0.0f, 5.0f));  // leaving it
+  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f));                // zero direction
+  rays.push_back(MakeRay(1000.0f, 3000.0f, 0.0f, 0.0f, -0.0f, 1.0f));         // tangent to the far sphere
+  rays.push_back(MakeRay(3.0f, 0.75f, -10.0f, 0.0f, 0.0f, 1.0f));             // tangent to sphere 1
   for (const KernelProbes& pr : AvailableProbes()) {
     for (bool fast : {false, true}) {
       const Tally t = ProbePrims(pr, ps, rays, 0, ps.sc.counts.nSpheres, fast);
@@ -305,9 +305,9 @@ TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerat
     rays.push_back(MakeRay(0.5f, 0.0f, -3.0f, z0, z0, 1.0f));     // parallel to the axis (A = 0, Bh = 0)
     rays.push_back(MakeRay(2.0f, 0.0f, -1.0f, -1.0f, z0, 1.0f));  // parallel to the cone's generator (A = 0)
     rays.push_back(MakeRay(2.0f, 0.5f, -1.0f, -1.0f, z0, 1.0f));
-    rays.push_back(MakeRay(1.0f, 1.0f, 0.0f, z0, z0, 1.0f));      // along the degenerate cone's axis
+    rays.push_back(MakeRay(1.0f, 1.0f, 0.0f, z0, z0, 1.0f));  // along the degenerate cone's axis
   }
-  rays.push_back(MakeRay(0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 0.0f));     // from inside
+  rays.push_back(MakeRay(0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 0.0f));  // from inside
   for (const KernelProbes& pr : AvailableProbes()) {
     for (bool fast : {false, true}) {
       const Tally t = ProbePrims(pr, ps, rays, c0, cEnd, fast);
@@ -358,7 +358,7 @@ TEST_CASE("simd intersectors: slab tests with zero directions, origins on planes
     rays.push_back(MakeRay(0.5f, 0.5f, 0.5f, 1.0f, z0, z0));   // from inside, in the flat box's plane
     rays.push_back(MakeRay(-1.0f, 1.0f, 0.5f, 1.0f, z0, z0));  // grazing the face y = 1
     rays.push_back(MakeRay(-1.0f, -1.0f, -1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 1.0f));
-    rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, z0, z0, z0));     // zero direction at a corner
+    rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, z0, z0, z0));  // zero direction at a corner
   }
   const auto random = RaysAround(0.5f, 0.5f, 0.5f, 1.0f, 200, 99);
   rays.insert(rays.end(), random.begin(), random.end());
