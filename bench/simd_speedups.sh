@@ -9,9 +9,11 @@
 #   WxH     primary image size; secondary and random sets get W*H rays (default 512x512)
 #   REPEAT  timed repetitions per cell (default 5)
 #   scenes  SPD scene names (default "balls gears teapot tree")
-# Every SIMD answer set is also checked against the fp64 reference (the
-# `wrong` column must read 0). Timings on a loaded machine are noise: the
-# script prints the load average before and after.
+# The `auto` column is the default variant (what it chose: p packet, s
+# single). The answers of the scalar backend and of both AVX2 variants are
+# checked against the fp64 reference (`wrong`: scalar / packet / single; the
+# SIMD backend must match the scalar count). Timings on a loaded machine are
+# noise: the script prints the load average before and after.
 set -euo pipefail
 
 BIN=build/release/bin/cellray
@@ -38,6 +40,11 @@ ms() {  # ms SCENE RAYS OCCL ARGS... -> median trace_ms
   "$BIN" trace "$ROOT/scenes/spd/$scene.nff" --rays "$rays" $occl --threads 1 --repeat "$REPEAT" "$@" \
     | python3 -c 'import json,sys; print(json.load(sys.stdin)["trace_ms"])'
 }
+auto() {  # auto SCENE RAYS OCCL -> "median_ms letter" of the default variant
+  local scene=$1 rays=$2 occl=$3
+  "$BIN" trace "$ROOT/scenes/spd/$scene.nff" --rays "$rays" $occl --threads 1 --repeat "$REPEAT" --backend simd \
+    | python3 -c 'import json,sys; j=json.load(sys.stdin); print(j["trace_ms"], j["variant"].split()[1][0])'
+}
 wrong() {  # wrong SCENE RAYS OCCL ARGS... -> wrong answers of one run
   local scene=$1 rays=$2 occl=$3; shift 3
   "$BIN" trace "$ROOT/scenes/spd/$scene.nff" --rays "$rays" $occl "$@" -o "$TMP/x.hits" > /dev/null
@@ -51,8 +58,8 @@ cell() {  # cell BASE_MS MS -> "MS (SPEEDUPx)"
 echo "cellray SIMD speed-ups: $SIZE rays, --threads 1, median of $REPEAT, best ISA here: $ISA"
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo
-echo "| scene | rays | scalar ms | avx2 packet | avx2 single | sse4 packet | sse4 single | avx2 wrong |"
-echo "|---|---|---|---|---|---|---|---|"
+echo "| scene | rays | scalar ms | avx2 packet | avx2 single | avx2 auto | sse4 packet | sse4 single | wrong |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for scene in $SCENES; do
   for kind in primary shadow diffuse random; do
     rays="$TMP/$scene.$kind.rays"
@@ -71,12 +78,15 @@ for scene in $SCENES; do
         t=$(ms "$scene" "$rays" "$occl" --backend simd --isa "$isa" --variant "$variant")
         row="$row | $(cell "$base" "$t")"
       done
+      if [ "$isa" = avx2 ]; then
+        read -r t v < <(auto "$scene" "$rays" "$occl")
+        row="$row | $(cell "$base" "$t") $v"
+      fi
     done
+    w="$(wrong "$scene" "$rays" "$occl" --backend scalar)"
     if [ "$ISA" = avx2 ]; then
-      w=$(( $(wrong "$scene" "$rays" "$occl" --backend simd --isa avx2 --variant packet) + \
-            $(wrong "$scene" "$rays" "$occl" --backend simd --isa avx2 --variant single) ))
-    else
-      w=n/a
+      w="$w / $(wrong "$scene" "$rays" "$occl" --backend simd --isa avx2 --variant packet)"
+      w="$w / $(wrong "$scene" "$rays" "$occl" --backend simd --isa avx2 --variant single)"
     fi
     echo "$row | $w |"
   done
