@@ -271,10 +271,15 @@ void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
     const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
     const RayRecord* recs[N];
     std::uint32_t idx[N];
-    for (int l = 0; l < count; ++l) {
-      idx[l] = RayIndex(job, p + std::size_t(l));
-      recs[l] = &job.rays[idx[l]];
+    if (job.imageWidth && !job.order) {
+      constexpr std::size_t tw = N / 2;
+      const std::size_t w = job.imageWidth, tilesPerRow = w / tw, tile = p / N;
+      const std::size_t base = (tile / tilesPerRow) * 2 * w + (tile % tilesPerRow) * tw;
+      for (int l = 0; l < count; ++l) idx[l] = static_cast<std::uint32_t>(base + std::size_t(l / tw) * w + l % tw);
+    } else {
+      for (int l = 0; l < count; ++l) idx[l] = RayIndex(job, p + std::size_t(l));
     }
+    for (int l = 0; l < count; ++l) recs[l] = &job.rays[idx[l]];
     for (int l = count; l < N; ++l) recs[l] = recs[0];
     RayPacket<N> P;
     HitPacket<N> H;

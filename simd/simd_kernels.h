@@ -50,6 +50,11 @@ struct KernelJob {
   const RayRecord* rays = nullptr;
   HitRecord* hits = nullptr;
   const std::uint32_t* order = nullptr;
+  // Packet kernels, without an order: imageWidth > 0 says the rays are a
+  // row-major image of that width, whose width is a multiple of N / 2 and
+  // height a multiple of 2, and positions run through it in (N/2) x 2 tiles,
+  // tile rows top to bottom: position p is lane p % N of tile p / N.
+  std::uint32_t imageWidth = 0;
   std::size_t begin = 0, end = 0;
   int occlusion = 0;
   KernelStats* stats = nullptr;  // non-null for statistics kernels

@@ -135,13 +135,21 @@ class SimdTracer final : public Tracer {
         usedPacket_ = false;
       else
         usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, order);
+      std::uint32_t imageWidth = 0;
       if (usedPacket_ && order.empty()) {
         // Packets of primary rays cover compact image tiles (4x2 or 2x2
-        // pixels) rather than row segments when the set is a row-major image.
+        // pixels) rather than row segments when the set is a row-major
+        // image: computed in the kernel when the tiles fit the image, else
+        // through an order.
         const int w = DetectImageWidth(rays);
-        if (w > 0) order = TileOrder(rays.size(), w, width_ == 8 ? 4 : 2, 2);
+        const std::size_t tileW = std::size_t(width_) / 2;
+        if (w > 0 && std::size_t(w) % tileW == 0 && (rays.size() / std::size_t(w)) % 2 == 0)
+          imageWidth = static_cast<std::uint32_t>(w);
+        else if (w > 0)
+          order = TileOrder(rays.size(), w, int(tileW), 2);
       }
-      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, hits, order, occlusion, wantStats ? &sum : nullptr);
+      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, hits, order, imageWidth, occlusion,
+          wantStats ? &sum : nullptr);
     }
     if (wantStats) {
       stats->rays += sum.rays;
@@ -175,11 +183,12 @@ class SimdTracer final : public Tracer {
   bool usedPacket_ = false;
   bool traced_ = false;
 
-  // Traces positions [0, n) of `order` (or of the rays themselves when order
-  // is empty), parallel over blocks of whole packets: small enough to
-  // balance the threads, large enough to amortise the scheduling.
+  // Traces positions [0, n) of `order`, or when order is empty of the rays
+  // themselves (in image tiles when imageWidth > 0, KernelJob), parallel over
+  // blocks of whole packets: small enough to balance the threads, large
+  // enough to amortise the scheduling.
   void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits,
-           const std::vector<std::uint32_t>& order, bool occlusion, KernelStats* sum) const
+           const std::vector<std::uint32_t>& order, std::uint32_t imageWidth, bool occlusion, KernelStats* sum) const
   {
     const std::size_t n = order.empty() ? rays.size() : order.size();
     const std::size_t unit = packet ? std::size_t(width_) : 1;
@@ -191,6 +200,7 @@ class SimdTracer final : public Tracer {
       job.rays = rays.data();
       job.hits = hits.data();
       job.order = order.empty() ? nullptr : order.data();
+      job.imageWidth = imageWidth;
       job.begin = r.begin() * unit;
       job.end = std::min(r.end() * unit, n);
       job.occlusion = occlusion ? 1 : 0;
