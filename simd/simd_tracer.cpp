@@ -4,7 +4,8 @@
 // Variants: `packet` (N coherent rays walk the binary BVH together,
 // simd/bvh_packet.h), `single` (one ray through the N-wide BVH,
 // simd/bvh_single.h), `auto` (packets when the ray set looks coherent,
-// simd/ray_coherence.h; see docs/SIMD.md for the measurements behind it).
+// simd/ray_coherence.h, else whichever a short pilot finds faster; see
+// docs/SIMD.md for the measurements behind it).
 // What this backend does not implement is delegated to the scalar backend
 // (the kernels of kernels/ compiled as C++), and VariantName says so:
 // --isa scalar, --precision fp64, and the grid and octree structures (until
@@ -44,8 +45,10 @@ Variant ParseVariant(const std::string& s)
   throw InputError(fmt::format("--variant '{}': the simd backend has packet, single (or ray) and auto", s));
 }
 
-// Packets pay off when most groups of consecutive rays share a direction
-// cone (docs/SIMD.md: primary and shadow rays yes, diffuse and random no).
+// A set is coherent when at least this fraction of sampled groups of
+// consecutive rays share a narrow direction cone: packets, no question
+// (primary rays measure 0.96-1.0; shadow, diffuse and random rays 0-0.02,
+// and for those the pilot below decides).
 constexpr double kAutoPacketFraction = 0.5;
 // Incoherent sets: a pilot of 2 x 8 blocks of 512 rays (8192 rays) decides,
 // when the set is large enough for the pilot to be a small part of it.
@@ -72,7 +75,7 @@ IsaEntry EntryOf(Isa isa)
 class SimdTracer final : public Tracer {
  public:
   SimdTracer(const Scene& scene, const TraceConfig& cfg, Isa isa, Variant variant)
-      : scene_(scene), config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds())
+      : config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds())
   {
     data_ = BuildAccel(scene, cfg.accel, cfg.params);
     info_ = data_.info;
@@ -169,7 +172,6 @@ class SimdTracer final : public Tracer {
   }
 
  private:
-  const Scene& scene_;
   TraceConfig config_;
   Isa isa_;
   Variant variant_;
