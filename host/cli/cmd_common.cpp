@@ -19,7 +19,7 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
   cmd->add_option("--bvh-leaf", o.bvhLeaf, "Max primitives per BVH leaf (0: default)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");
   cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU)");
-  cmd->add_option("--variant", o.variant, "Traversal variant: ray or packet (default: the backend's choice)");
+  cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; default: the backend's choice");
 }
 
 TraceConfig TracerOptions::ToConfig() const

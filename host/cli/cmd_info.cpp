@@ -5,18 +5,9 @@
 
 #include "cl/cl_info.h"
 #include "cli/commands.h"
+#include "simd/isa.h"
 
 namespace cr::cli {
-
-static std::string DetectIsa()
-{
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return "avx2";
-  if (__builtin_cpu_supports("sse4.1")) return "sse4";
-#endif
-  return "scalar";
-}
 
 Run RegisterInfo(CLI::App& app)
 {
@@ -25,7 +16,7 @@ Run RegisterInfo(CLI::App& app)
     (void)cmd;
     nlohmann::json j;
     j["opencl_platforms"] = OpenCLInventory();
-    j["simd_isa"] = DetectIsa();
+    j["simd_isa"] = simd::IsaName(simd::BestIsa());
     j["cpu_threads"] = tbb::info::default_concurrency();
 #ifdef NDEBUG
     j["build_type"] = "release";

@@ -1,0 +1,295 @@
+// One ray at a time through the N-wide BVH (BVH4_CPU / BVH8_CPU of
+// simd/bvh_wide.h; Wald, Benthin & Boulos 2008, "Getting rid of packets",
+// and Dammertz et al. 2008, "Shallow bounding volume hierarchies"): the ray
+// tests all N child boxes of a node at once, visits the hit children nearest
+// first (the others wait on the stack with their entry distance), and tests
+// the primitives of a leaf K at a time from structure-of-arrays packs.
+//
+// Same answers as BVH_Trace: every box and primitive test is the scalar one
+// lane by lane; a pack's hits are reduced with Hit_Closer's order (nearer t,
+// then lower g, which is lane order inside a pack), so the closest hit does
+// not depend on the visiting order, and a pending node is dropped only when
+// its entry distance is beyond the current hit (as the scalar stack pop).
+// Statistics: nTS counts wide nodes and leaves visited, nIT the real
+// primitives of every pack tested.
+#pragma once
+
+#include "simd/bvh_packet.h"
+#include "simd/kernel_common.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// The ray broadcast to the K lanes of the primitive packs.
+template <int K>
+struct PackRay {
+  vfloat<K> org[3], dir[3];
+  vfloat<K> orgK[3];  // org[kx], org[ky], org[kz]
+  vfloat<K> s[3];
+  vfloat<K> tmin;
+  int k[3];
+};
+
+template <int K>
+CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
+{
+  pr.k[0] = r.kx;
+  pr.k[1] = r.ky;
+  pr.k[2] = r.kz;
+  for (int a = 0; a < 3; ++a) {
+    pr.org[a] = vfloat<K>(r.org[a]);
+    pr.dir[a] = vfloat<K>(r.dir[a]);
+    pr.orgK[a] = vfloat<K>(r.org[pr.k[a]]);
+  }
+  pr.s[0] = vfloat<K>(r.sx);
+  pr.s[1] = vfloat<K>(r.sy);
+  pr.s[2] = vfloat<K>(r.sz);
+  pr.tmin = vfloat<K>(r.tmin);
+}
+
+// Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit changed.
+template <int K>
+CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit)
+{
+  if (None(ok)) return false;
+  const float best = HMin(Select(ok, t, vfloat<K>(__builtin_inff())));
+  const int lane = LowestBit((ok & (t == vfloat<K>(best))).Bits());
+  const std::uint32_t gl = g[lane];
+  if (!Hit_Closer(best, gl, &hit)) return false;
+  hit.t = best;
+  hit.u = u[lane];
+  hit.v = v[lane];
+  hit.g = gl;
+  return true;
+}
+
+template <int K>
+CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
+{
+  return !(vint<K>::Load(g) == vint<K>(static_cast<int>(CR_NO_HIT)));
+}
+
+// The leaf's packs, type by type. Returns true when the hit changed
+// (occlusion: as soon as it does).
+template <int K, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
+                                       int anyHit, StatsSum& st)
+{
+  bool changed = false;
+  if constexpr (kTypes & kSphereBit) {
+    const SpherePack<K>* packs = static_cast<const SpherePack<K>*>(sc.spherePacks) + leaf.first[0];
+    for (int p = 0; p < leaf.count[0]; ++p) {
+      const SpherePack<K>& pk = packs[p];
+      const vbool<K> valid = Pack_Valid<K>(pk.g);
+      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
+      vfloat<K> f[3], t;
+      for (int i = 0; i < 3; ++i) f[i] = pr.org[i] - vfloat<K>::Load(pk.center[i]);
+      const vbool<K> ok =
+          valid & Sphere_IntersectN<kFast, K>(f, pr.dir, vfloat<K>::Load(pk.radius), pr.tmin, vfloat<K>(hit.t), t);
+      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
+        changed = true;
+        if (anyHit) return true;
+      }
+    }
+  }
+  if constexpr (kTypes & kTriangleBit) {
+    const TrianglePack<K>* packs = static_cast<const TrianglePack<K>*>(sc.trianglePacks) + leaf.first[1];
+    for (int p = 0; p < leaf.count[1]; ++p) {
+      const TrianglePack<K>& pk = packs[p];
+      const vbool<K> valid = Pack_Valid<K>(pk.g);
+      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
+      vfloat<K> t, u, v;
+      vbool<K> ok;
+      if constexpr (kFast) {
+        vfloat<K> v0[3], v1[3], v2[3];
+        for (int i = 0; i < 3; ++i) {
+          v0[i] = vfloat<K>::Load(pk.v[0][i]);
+          v1[i] = vfloat<K>::Load(pk.v[1][i]);
+          v2[i] = vfloat<K>::Load(pk.v[2][i]);
+        }
+        ok = Triangle_MollerTrumboreN<K>(v0, v1, v2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
+      } else {
+        vfloat<K> A[3], B[3], C[3];
+        for (int j = 0; j < 3; ++j) {
+          A[j] = vfloat<K>::Load(pk.v[0][pr.k[j]]) - pr.orgK[j];
+          B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
+          C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
+        }
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, pr.tmin, vfloat<K>(hit.t), t, u, v);
+      }
+      if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
+        changed = true;
+        if (anyHit) return true;
+      }
+    }
+  }
+  if constexpr (kTypes & kConeBit) {
+    const ConePack<K>* packs = static_cast<const ConePack<K>*>(sc.conePacks) + leaf.first[2];
+    for (int p = 0; p < leaf.count[2]; ++p) {
+      const ConePack<K>& pk = packs[p];
+      const vbool<K> valid = Pack_Valid<K>(pk.g);
+      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
+      vfloat<K> dl[3], w[3], t;
+      for (int i = 0; i < 3; ++i) {
+        dl[i] = pr.org[i] - vfloat<K>::Load(pk.base[i]);
+        w[i] = vfloat<K>::Load(pk.w[i]);
+      }
+      const vbool<K> ok =
+          valid & Cone_IntersectN<kFast, K>(dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
+                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t);
+      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
+        changed = true;
+        if (anyHit) return true;
+      }
+    }
+  }
+  return changed;
+}
+
+// Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
+template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
+{
+  struct Entry {
+    std::uint32_t ref;
+    float t;
+  };
+  // Each wide level pushes at most N - 1 entries; the wide depth is at most
+  // the binary depth bound.
+  Entry stack[(N - 1) * kBVHStack + 1];
+  int sp = 0;
+  const WideNode<N>* nodes = static_cast<const WideNode<N>*>(sc.wideNodes);
+  vfloat<N> org[3], inv[3];
+  int nearHi[3];
+  for (int a = 0; a < 3; ++a) {
+    org[a] = vfloat<N>(ray.org[a]);
+    inv[a] = vfloat<N>(ray.inv[a]);
+    nearHi[a] = ray.inv[a] < 0.0f;
+  }
+  const vfloat<N> tmin(ray.tmin);
+  PackRay<K> pr;
+  PackRay_Init<K>(pr, ray);
+  std::uint32_t ref = 0;
+  for (;;) {
+    if (!(ref & kWideLeafFlag)) {
+      const WideNode<N>& n = nodes[ref];
+      if constexpr (kStats) ++st.nTS;
+      const float* nearP[3];
+      const float* farP[3];
+      for (int a = 0; a < 3; ++a) {
+        nearP[a] = nearHi[a] ? n.upper[a] : n.lower[a];
+        farP[a] = nearHi[a] ? n.lower[a] : n.upper[a];
+      }
+      vfloat<N> tE;
+      unsigned bits = Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(hit.t), tE).Bits();
+      if (bits) {
+        const int i0 = LowestBit(bits);
+        bits &= bits - 1;
+        if (!bits) {
+          ref = n.child[i0];
+          continue;
+        }
+        // Two or more: push all, farthest deepest, and continue with the nearest.
+        alignas(32) float te[N];
+        tE.Store(te);
+        const int base = sp;
+        stack[sp++] = {n.child[i0], te[i0]};
+        do {
+          const int i = LowestBit(bits);
+          bits &= bits - 1;
+          int j = sp++;
+          while (j > base && stack[j - 1].t < te[i]) {
+            stack[j] = stack[j - 1];
+            --j;
+          }
+          stack[j] = {n.child[i], te[i]};
+        } while (bits);
+        ref = stack[--sp].ref;
+        continue;
+      }
+    } else {
+      if constexpr (kStats) {
+        ++st.nTS;
+        ++st.nLeaves;
+      }
+      const WideLeaf& leaf = sc.wideLeaves[ref & ~kWideLeafFlag];
+      if (WideLeaf_Intersect<K, kTypes, kFast, kStats>(sc, leaf, pr, hit, anyHit, st) && anyHit) return;
+    }
+    for (;;) {
+      if (sp == 0) return;
+      --sp;
+      if (stack[sp].t <= hit.t) {
+        ref = stack[sp].ref;
+        break;
+      }
+    }
+  }
+}
+
+// The lanes of a packet as scalar rays: what Ray_Init makes of each record.
+template <int N>
+CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>& H, Ray* rays)
+{
+  alignas(32) float org[3][N], dir[3][N], inv[3][N], s[3][N], tmin[N], tmax[N];
+  alignas(32) std::uint32_t k[3][N];
+  for (int a = 0; a < 3; ++a) {
+    P.org[a].Store(org[a]);
+    P.dir[a].Store(dir[a]);
+    P.inv[a].Store(inv[a]);
+    P.s[a].Store(s[a]);
+    P.k[a].Store(k[a]);
+  }
+  P.tmin.Store(tmin);
+  H.t.Store(tmax);
+  for (int l = 0; l < N; ++l) {
+    Ray& ray = rays[l];
+    for (int a = 0; a < 3; ++a) {
+      ray.org[a] = org[a][l];
+      ray.dir[a] = dir[a][l];
+      ray.inv[a] = inv[a][l];
+    }
+    ray.tmin = tmin[l];
+    ray.tmax = tmax[l];
+    ray.sx = s[0][l];
+    ray.sy = s[1][l];
+    ray.sz = s[2][l];
+    ray.kx = static_cast<int>(k[0][l]);
+    ray.ky = static_cast<int>(k[1][l]);
+    ray.kz = static_cast<int>(k[2][l]);
+  }
+}
+
+// Traces positions [job.begin, job.end) one ray at a time. Rays are prepared
+// N at a time by the packet's vectorised Ray_Init (RayPacket_Init), which
+// has no data-dependent branches, unlike the scalar Ray_Init that an
+// incoherent ray set would make mispredict on every ray.
+template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
+void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const PrimView pv = MakePrimView(sc);
+  StatsSum st;
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    for (int l = 0; l < count; ++l) {
+      idx[l] = RayIndex(job, p + std::size_t(l));
+      recs[l] = &job.rays[idx[l]];
+    }
+    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    Ray rays[N];
+    RayPacket_Extract<N>(P, H, rays);
+    for (int l = 0; l < count; ++l) {
+      const Ray& ray = rays[l];
+      Hit hit;
+      Hit_Init(&hit, &ray);
+      BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, job.occlusion, st);
+      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    }
+  }
+  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

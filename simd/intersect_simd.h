@@ -1,0 +1,238 @@
+// Ray-primitive and ray-box tests on N lanes, lane by lane the arithmetic of
+// kernels/intersect.h: the same operations in the same order, separate
+// multiplies and adds (no FMA), IEEE division and square root, and the C
+// semantics of fmin/fmax, copysign and of comparisons with NaN. The lanes are
+// either N rays against one primitive (packets: the primitive broadcast) or
+// one ray against N primitives (single-ray packs: the ray broadcast); the
+// functions do not care which. kFast selects the CR_FAST algorithms.
+// Included by simd/kernel_instance.inc inside the ISA namespace.
+#pragma once
+
+#include "simd/vec.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+template <int N>
+using V3 = vfloat<N>[3];
+
+template <int N>
+CR_SIMD_INLINE vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+// Box_Intersect after the per-axis plane distances: n[a], f[a] are the near
+// and far distances of axis a (already chosen by the sign of inv). The
+// accumulation starts at -inf / +inf and drops NaN (0 * inf on a
+// plane-parallel ray) as fmax/fmin do; the far distance gets Ize's factor
+// 1 + 2 gamma(3) unless kFast. Writes the entry distance.
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Box_Finish(const vfloat<N> n[3], const vfloat<N> f[3], vfloat<N> tmin, vfloat<N> tmax,
+                                   vfloat<N>& tEnter)
+{
+  vfloat<N> boxNear(-__builtin_inff()), boxFar(__builtin_inff());
+  for (int a = 0; a < 3; ++a) {
+    boxNear = Max(n[a], boxNear);  // NaN n keeps boxNear, as fmax(boxNear, n)
+    boxFar = Min(f[a], boxFar);
+  }
+  if constexpr (!kFast) boxFar = boxFar * vfloat<N>(1.0000004f);
+  const vfloat<N> tn = Max(boxNear, tmin);
+  const vfloat<N> tf = Min(boxFar, tmax);
+  tEnter = tn;
+  return tn <= tf;
+}
+
+// Packet form: one box, a ray per lane (near/far chosen per lane by the sign
+// of inv, as Box_Intersect does).
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Box_IntersectRays(const float* bmin, const float* bmax, const vfloat<N> org[3],
+                                          const vfloat<N> inv[3], const vbool<N> invNeg[3], vfloat<N> tmin,
+                                          vfloat<N> tmax, vfloat<N>& tEnter)
+{
+  vfloat<N> n[3], f[3];
+  for (int a = 0; a < 3; ++a) {
+    const vfloat<N> lo = (vfloat<N>(bmin[a]) - org[a]) * inv[a];
+    const vfloat<N> hi = (vfloat<N>(bmax[a]) - org[a]) * inv[a];
+    n[a] = Select(invNeg[a], hi, lo);
+    f[a] = Select(invNeg[a], lo, hi);
+  }
+  return Box_Finish<kFast, N>(n, f, tmin, tmax, tEnter);
+}
+
+// Single-ray form: N boxes structure-of-arrays (nearPlane[a] is bmax[a] when
+// the ray's inv[a] < 0, else bmin[a]; farPlane the other), one ray broadcast.
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], const float* const farPlane[3],
+                                           const vfloat<N> org[3], const vfloat<N> inv[3], vfloat<N> tmin,
+                                           vfloat<N> tmax, vfloat<N>& tEnter)
+{
+  vfloat<N> n[3], f[3];
+  for (int a = 0; a < 3; ++a) {
+    n[a] = (vfloat<N>::Load(nearPlane[a]) - org[a]) * inv[a];
+    f[a] = (vfloat<N>::Load(farPlane[a]) - org[a]) * inv[a];
+  }
+  return Box_Finish<kFast, N>(n, f, tmin, tmax, tEnter);
+}
+
+// Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller first.
+template <int N>
+CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0,
+                                     vfloat<N>& t1)
+{
+  const vfloat<N> q = -(bh + CopySign(Sqrt(disc), bh));
+  const vfloat<N> r0 = q / a;
+  const vfloat<N> r1 = Select(q != vfloat<N>(0.0f), c / q, r0);
+  t0 = FMin(r0, r1);
+  t1 = FMax(r0, r1);
+}
+
+// Sphere_Intersect: nearest root in [tmin, tmax]. f = org - center.
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], vfloat<N> rad, vfloat<N> tmin,
+                                          vfloat<N> tmax, vfloat<N>& tHit)
+{
+  const vfloat<N> a = Dot3N<N>(dir, dir);
+  const vfloat<N> bh = Dot3N<N>(f, dir);
+  const vfloat<N> c = Dot3N<N>(f, f) - rad * rad;
+  vfloat<N> t0, t1;
+  vbool<N> miss;
+  if constexpr (kFast) {
+    const vfloat<N> b = vfloat<N>(2.0f) * bh;
+    const vfloat<N> disc4 = b * b - vfloat<N>(4.0f) * a * c;
+    miss = disc4 < vfloat<N>(0.0f);
+    const vfloat<N> sq = Sqrt(disc4);
+    t0 = (-b - sq) / (vfloat<N>(2.0f) * a);
+    t1 = (-b + sq) / (vfloat<N>(2.0f) * a);
+  } else {
+    const vfloat<N> cx = f[1] * dir[2] - f[2] * dir[1];
+    const vfloat<N> cy = f[2] * dir[0] - f[0] * dir[2];
+    const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
+    const vfloat<N> disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
+    miss = disc < vfloat<N>(0.0f);
+    Quadratic_RootsN<N>(a, bh, c, disc, t0, t1);
+  }
+  const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
+  const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
+  tHit = Select(in0, t0, t1);
+  return AndNot(in0 | in1, miss);
+}
+
+// Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
+// translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
+// ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
+template <int N>
+CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
+                                             const vfloat<N> s[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
+                                             vfloat<N>& uHit, vfloat<N>& vHit)
+{
+  const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
+  const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
+  const vfloat<N> Cx = C[0] - s[0] * C[2], Cy = C[1] - s[1] * C[2];
+  const vfloat<N> U = Cx * By - Cy * Bx;
+  const vfloat<N> V = Ax * Cy - Ay * Cx;
+  const vfloat<N> W = Bx * Ay - By * Ax;
+  const vfloat<N> zero(0.0f);
+  vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+  const vfloat<N> det = U + V + W;
+  miss = miss | (det == zero);
+  const vfloat<N> Az = s[2] * A[2], Bz = s[2] * B[2], Cz = s[2] * C[2];
+  const vfloat<N> T = U * Az + V * Bz + W * Cz;
+  const vfloat<N> invDet = vfloat<N>(1.0f) / det;
+  const vfloat<N> t = T * invDet;
+  tHit = t;
+  uHit = V * invDet;
+  vHit = W * invDet;
+  return AndNot((t >= tmin) & (t <= tmax), miss);
+}
+
+// Fast Triangle_Intersect (Moller & Trumbore 1997, |det| >= 1e-9).
+// Comparisons keep the scalar code's NaN behaviour; a NaN t passes its range
+// test there and is then refused by Hit_Closer, so it is refused here.
+template <int N>
+CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
+                                                 const vfloat<N> org[3], const vfloat<N> dir[3], vfloat<N> tmin,
+                                                 vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit, vfloat<N>& vHit)
+{
+  vfloat<N> e1[3], e2[3], tv[3], pv[3], qv[3];
+  for (int i = 0; i < 3; ++i) {
+    e1[i] = v1[i] - v0[i];
+    e2[i] = v2[i] - v0[i];
+    tv[i] = org[i] - v0[i];
+  }
+  pv[0] = dir[1] * e2[2] - dir[2] * e2[1];
+  pv[1] = dir[2] * e2[0] - dir[0] * e2[2];
+  pv[2] = dir[0] * e2[1] - dir[1] * e2[0];
+  const vfloat<N> det = Dot3N<N>(e1, pv);
+  const vfloat<N> zero(0.0f), one(1.0f);
+  vbool<N> miss = Abs(det) < vfloat<N>(1e-9f);
+  const vfloat<N> invDet = one / det;
+  const vfloat<N> u = Dot3N<N>(tv, pv) * invDet;
+  miss = miss | (u < zero) | (u > one);
+  qv[0] = tv[1] * e1[2] - tv[2] * e1[1];
+  qv[1] = tv[2] * e1[0] - tv[0] * e1[2];
+  qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
+  const vfloat<N> v = Dot3N<N>(dir, qv) * invDet;
+  miss = miss | (v < zero) | (u + v > one);
+  const vfloat<N> t = Dot3N<N>(e2, qv) * invDet;
+  miss = miss | (t < tmin) | (t > tmax) | IsNaN(t);
+  tHit = t;
+  uHit = u;
+  vHit = v;
+  return !miss;
+}
+
+// Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
+// dl = org - base.
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3],
+                                        vfloat<N> H, vfloat<N> r0, vfloat<N> k, vfloat<N> tmin, vfloat<N> tmax,
+                                        vfloat<N>& tHit)
+{
+  const vfloat<N> zero(0.0f);
+  vbool<N> miss = !(H > zero);
+  const vfloat<N> ds = Dot3N<N>(dir, w);
+  const vfloat<N> os = Dot3N<N>(dl, w);
+  vfloat<N> dR[3], oR[3];
+  for (int i = 0; i < 3; ++i) {
+    dR[i] = dir[i] - ds * w[i];
+    oR[i] = dl[i] - os * w[i];
+  }
+  const vfloat<N> rb = r0 + k * os;
+  const vfloat<N> A = Dot3N<N>(dR, dR) - k * k * ds * ds;
+  const vfloat<N> Bh = Dot3N<N>(oR, dR) - k * ds * rb;
+  const vfloat<N> C = Dot3N<N>(oR, oR) - rb * rb;
+  // A == 0: the linear case.
+  const vbool<N> linear = A == zero;
+  const vfloat<N> tLin = -C / (vfloat<N>(2.0f) * Bh);
+  vfloat<N> t0, t1;
+  vbool<N> quadMiss;
+  if constexpr (kFast) {
+    const vfloat<N> disc4 = vfloat<N>(4.0f) * Bh * Bh - vfloat<N>(4.0f) * A * C;
+    quadMiss = disc4 < zero;
+    const vfloat<N> sq = Sqrt(disc4);
+    const vfloat<N> ta = (vfloat<N>(-2.0f) * Bh - sq) / (vfloat<N>(2.0f) * A);
+    const vfloat<N> tb = (vfloat<N>(-2.0f) * Bh + sq) / (vfloat<N>(2.0f) * A);
+    t0 = FMin(ta, tb);
+    t1 = FMax(ta, tb);
+  } else {
+    vfloat<N> e[3], x[3];
+    for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
+    x[0] = oR[1] * dR[2] - oR[2] * dR[1];
+    x[1] = oR[2] * dR[0] - oR[0] * dR[2];
+    x[2] = oR[0] * dR[1] - oR[1] * dR[0];
+    const vfloat<N> disc = Dot3N<N>(e, e) - Dot3N<N>(x, x);
+    quadMiss = disc < zero;
+    Quadratic_RootsN<N>(A, Bh, C, disc, t0, t1);
+  }
+  t0 = Select(linear, tLin, t0);
+  t1 = Select(linear, tLin, t1);
+  miss = miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear);
+  const vfloat<N> s0 = os + t0 * ds;
+  const vfloat<N> s1 = os + t1 * ds;
+  const vbool<N> ok0 = (t0 >= tmin) & (t0 <= tmax) & (s0 >= zero) & (s0 <= H);
+  const vbool<N> ok1 = (t1 >= tmin) & (t1 <= tmax) & (s1 >= zero) & (s1 <= H);
+  tHit = Select(ok0, t0, t1);
+  return AndNot(ok0 | ok1, miss);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

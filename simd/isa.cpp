@@ -1,0 +1,59 @@
+#include "simd/isa.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace cr::simd {
+
+bool IsaSupported(Isa isa)
+{
+  switch (isa) {
+    case Isa::Scalar: return true;
+#if defined(CELLRAY_SIMD_X86)
+    case Isa::Sse4: __builtin_cpu_init(); return __builtin_cpu_supports("sse4.1");
+    case Isa::Avx2: __builtin_cpu_init(); return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    case Isa::Sse4:
+    case Isa::Avx2: return false;
+#endif
+  }
+  return false;
+}
+
+Isa BestIsa()
+{
+  if (IsaSupported(Isa::Avx2)) return Isa::Avx2;
+  if (IsaSupported(Isa::Sse4)) return Isa::Sse4;
+  return Isa::Scalar;
+}
+
+const char* IsaName(Isa isa)
+{
+  switch (isa) {
+    case Isa::Scalar: return "scalar";
+    case Isa::Sse4: return "sse4";
+    case Isa::Avx2: return "avx2";
+  }
+  return "?";
+}
+
+Isa ParseIsa(const std::string& name)
+{
+  if (name.empty()) return BestIsa();
+  Isa isa;
+  if (name == "avx2")
+    isa = Isa::Avx2;
+  else if (name == "sse4")
+    isa = Isa::Sse4;
+  else if (name == "scalar")
+    isa = Isa::Scalar;
+  else
+    throw InputError(fmt::format("unknown --isa '{}' (expected avx2, sse4 or scalar)", name));
+  if (!IsaSupported(isa))
+    throw InputError(fmt::format("--isa {}: this CPU (or build) does not support it; best available is {}", name,
+                                 IsaName(BestIsa())));
+  return isa;
+}
+
+}  // namespace cr::simd

@@ -1,0 +1,20 @@
+// Instruction sets of the SIMD backend, detected at run time (CPUID through
+// __builtin_cpu_supports): nothing in the program assumes AVX2 at compile
+// time; only the kernel units of one ISA are compiled with its flags.
+#pragma once
+
+#include <string>
+
+namespace cr::simd {
+
+enum class Isa { Scalar, Sse4, Avx2 };
+
+// The best ISA this CPU runs: avx2 (with FMA), else sse4 (SSE4.1), else scalar.
+Isa BestIsa();
+bool IsaSupported(Isa isa);
+const char* IsaName(Isa isa);
+// "avx2", "sse4", "scalar", or empty for BestIsa(). InputError for an unknown
+// name or an ISA this CPU (or this build) lacks.
+Isa ParseIsa(const std::string& name);
+
+}  // namespace cr::simd

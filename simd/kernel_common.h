@@ -1,0 +1,78 @@
+// What every per-ISA kernel unit includes first: the wrappers, the scalar
+// ray and hit code of kernels/ (Ray, Hit, Hit_Init, Hit_Closer, Hit_ToRecord)
+// compiled inside the ISA namespace, and the lane-wise intersectors. Define
+// CR_SIMD_NS before including. (Ray_Init itself is replaced by the
+// vectorised RayPacket_Init, which also keeps libstdc++'s out-of-line
+// std::fabs of a -O0 build out of these units.)
+#pragma once
+
+#include "kernels/types.h"
+#include "simd/simd_kernels.h"
+#include "simd/vec.h"
+
+namespace cr::simd::CR_SIMD_NS {
+typedef float real;
+// The scalar kernel helpers, so that hits are kept and reported exactly as
+// the scalar backend does (only the ray and hit parts are used; the scalar
+// intersectors compile to nothing).
+#include "kernels/intersect.h"
+}  // namespace cr::simd::CR_SIMD_NS
+
+#include "simd/intersect_simd.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// Binary BVH depth bound of host/accel/bvh_builder.cpp (CR_BVH_STACK).
+inline constexpr int kBVHStack = 64;
+
+// Type of unified index g, decided only among the types in kTypes, so a scene
+// with one type never branches.
+enum class PrimType { Sphere, Triangle, Cone };
+template <unsigned kTypes>
+inline PrimType TypeOf(std::uint32_t g, const PrimCounts& c)
+{
+  constexpr bool hasS = kTypes & kSphereBit, hasT = kTypes & kTriangleBit, hasC = kTypes & kConeBit;
+  if constexpr (hasS) {
+    if constexpr (!hasT && !hasC) return PrimType::Sphere;
+    if (g < c.nSpheres) return PrimType::Sphere;
+  }
+  if constexpr (hasT) {
+    if constexpr (!hasC) return PrimType::Triangle;
+    if (g < c.nSpheres + c.nTriangles) return PrimType::Triangle;
+  }
+  return PrimType::Cone;
+}
+
+inline PrimView MakePrimView(const KernelScene& sc)
+{
+  PrimView pv;
+  pv.spheres = sc.spheres;
+  pv.triangles = sc.triangles;
+  pv.cones = nullptr;  // Hit_ToRecord reads triangles only
+  pv.nSpheres = sc.counts.nSpheres;
+  pv.nTriangles = sc.counts.nTriangles;
+  pv.nCones = sc.counts.nCones;
+  return pv;
+}
+
+// Per-batch sums of the per-ray measures.
+struct StatsSum {
+  std::uint64_t nIT = 0, nTS = 0, nLeaves = 0, nEmptyLeaves = 0;
+};
+
+inline void AddStats(KernelStats* out, const StatsSum& s, std::size_t rays)
+{
+  if (!out) return;
+  out->rays += rays;
+  out->nIT += s.nIT;
+  out->nTS += s.nTS;
+  out->nLeaves += s.nLeaves;
+  out->nEmptyLeaves += s.nEmptyLeaves;
+}
+
+inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
+{
+  return job.order ? job.order[p] : static_cast<std::uint32_t>(p);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

@@ -1,0 +1,25 @@
+// Packet formation: orders in which to hand rays to the packet kernels so
+// that the N rays of a packet take similar paths through the BVH. The
+// kernels read rays through the order and scatter each hit back to its
+// ray's own index, so an order changes speed only, never answers.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "kernels/types.h"
+
+namespace cr::simd {
+
+// Width of the image a ray set of primary rays was made for: every ray has
+// the same origin and the directions step by one constant vector along
+// rows of W rays (host/scene/camera.cpp PrimaryRay, row-major). 0 when the
+// set does not look like that.
+int DetectImageWidth(const std::vector<RayRecord>& rays);
+
+// Positions of the rays of a W-wide row-major image in tiles of tileW x tileH
+// pixels (tileW * tileH = the packet width), tiles row by row: a packet
+// covers a compact tile instead of a row segment.
+std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tileW, int tileH);
+
+}  // namespace cr::simd

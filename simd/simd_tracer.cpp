@@ -1,0 +1,306 @@
+// The `simd` backend: BVH traversal with explicit SSE4.1 / AVX2 kernels,
+// chosen at run time (simd/isa.h), parallel over rays with oneTBB.
+//
+// Variants: `packet` (N coherent rays walk the binary BVH together,
+// simd/bvh_packet.h), `single` (one ray through the N-wide BVH,
+// simd/bvh_single.h), `auto` (packets when the ray set looks coherent,
+// simd/ray_coherence.h, else whichever a short pilot finds faster; see
+// docs/SIMD.md for the measurements behind it).
+// What this backend does not implement is delegated to the scalar backend
+// (the kernels of kernels/ compiled as C++), and VariantName says so:
+// --isa scalar, --precision fp64, and the grid and octree structures (until
+// their SIMD traversals land).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "simd/bvh_wide_builder.h"
+#include "simd/isa.h"
+#include "simd/ray_coherence.h"
+#include "simd/ray_order.h"
+#include "simd/simd_kernels.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig& config);
+
+namespace simd {
+
+namespace {
+
+enum class Variant { Auto, Packet, Single };
+
+Variant ParseVariant(const std::string& s)
+{
+  if (s.empty() || s == "auto") return Variant::Auto;
+  if (s == "packet") return Variant::Packet;
+  if (s == "single" || s == "ray") return Variant::Single;
+  throw InputError(fmt::format("--variant '{}': the simd backend has packet, single (or ray) and auto", s));
+}
+
+// A set is coherent when at least this fraction of sampled groups of
+// consecutive rays share a narrow direction cone: packets, no question
+// (primary rays measure 0.96-1.0; shadow, diffuse and random rays 0-0.02,
+// and for those the pilot below decides).
+constexpr double kAutoPacketFraction = 0.5;
+// Incoherent sets: a pilot of 2 x 8 blocks of 512 rays (8192 rays) decides,
+// when the set is large enough for the pilot to be a small part of it.
+// Blocks this long keep the cache reuse of consecutive rays that the full
+// run has (with 64-ray blocks the pilot favoured single rays on shadow rays
+// that packets trace 1.5x faster); measurements in docs/SIMD.md.
+constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
+
+struct IsaEntry {
+  KernelFn (*packet)(const KernelKey&);
+  KernelFn (*single)(const KernelKey&);
+  KernelProbes (*probes)();
+};
+
+IsaEntry EntryOf(Isa isa)
+{
+#if defined(CELLRAY_SIMD_X86)
+  if (isa == Isa::Avx2) return {&avx2::SelectPacketKernel, &avx2::SelectSingleKernel, &avx2::Probes};
+  if (isa == Isa::Sse4) return {&sse4::SelectPacketKernel, &sse4::SelectSingleKernel, &sse4::Probes};
+#endif
+  throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
+}
+
+class SimdTracer final : public Tracer {
+ public:
+  SimdTracer(const Scene& scene, const TraceConfig& cfg, Isa isa, Variant variant)
+      : config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds())
+  {
+    data_ = BuildAccel(scene, cfg.accel, cfg.params);
+    info_ = data_.info;
+    const IsaEntry e = EntryOf(isa);
+    const KernelProbes probes = e.probes();
+    width_ = probes.width;
+    cones_ = MakeConeData(scene);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (variant_ != Variant::Packet) {
+      wide_ = BuildWideBVH(data_.bvh, scene, cones_, probes.width, probes.packWidth);
+      info_.bytes += wide_->Bytes();
+      info_.params += fmt::format(" simd=bvh{}x{} wide_nodes={} wide_bytes={}", probes.width, probes.packWidth,
+                                  wide_->Nodes(), wide_->Bytes());
+    }
+    info_.bytes += cones_.size() * sizeof(ConeData);
+    info_.buildMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    sc_.nodes = data_.bvh.nodes.data();
+    sc_.refs = data_.bvh.refs.data();
+    if (wide_) wide_->Bind(sc_);
+    sc_.spheres = scene.spheres.data();
+    sc_.triangles = scene.triangles.data();
+    sc_.cones = cones_.data();
+    sc_.counts = scene.Counts();
+    sc_.primIds = primIds_.data();
+    sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
+
+    KernelKey key;
+    key.types = (scene.spheres.empty() ? 0u : kSphereBit) | (scene.triangles.empty() ? 0u : kTriangleBit) |
+                (scene.cones.empty() ? 0u : kConeBit);
+    key.fast = cfg.precision == Precision::Fast;
+    key.stats = cfg.stats;
+    key.packet = true;
+    packetFn_ = e.packet(key);
+    key.packet = false;
+    singleFn_ = e.single(key);
+  }
+
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    hits.resize(rays.size());
+    traced_ = true;
+    const bool wantStats = config_.stats && stats;
+    KernelStats sum;
+    if (!packetFn_) {
+      // No primitives: every ray misses.
+      for (auto& h : hits) h = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+      sum.rays = rays.size();
+    } else {
+      // order: the positions still to trace (all rays when empty).
+      std::vector<std::uint32_t> order;
+      if (variant_ == Variant::Packet)
+        usedPacket_ = true;
+      else if (variant_ == Variant::Single)
+        usedPacket_ = false;
+      else if (SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction)
+        usedPacket_ = true;
+      else if (rays.size() < kPilotMinRays)
+        usedPacket_ = false;
+      else
+        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, order);
+      std::uint32_t imageWidth = 0;
+      if (usedPacket_ && order.empty()) {
+        // Packets of primary rays cover compact image tiles (4x2 or 2x2
+        // pixels) rather than row segments when the set is a row-major
+        // image: computed in the kernel when the tiles fit the image, else
+        // through an order.
+        const int w = DetectImageWidth(rays);
+        const std::size_t tileW = std::size_t(width_) / 2;
+        if (w > 0 && std::size_t(w) % tileW == 0 && (rays.size() / std::size_t(w)) % 2 == 0)
+          imageWidth = static_cast<std::uint32_t>(w);
+        else if (w > 0)
+          order = TileOrder(rays.size(), w, int(tileW), 2);
+      }
+      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, hits, order, imageWidth, occlusion,
+          wantStats ? &sum : nullptr);
+    }
+    if (wantStats) {
+      stats->rays += sum.rays;
+      stats->nIT += sum.nIT;
+      stats->nTS += sum.nTS;
+      stats->nLeaves += sum.nLeaves;
+      stats->nEmptyLeaves += sum.nEmptyLeaves;
+    }
+  }
+
+  std::string DeviceName() const override { return "cpu"; }
+  std::string VariantName() const override
+  {
+    std::string v = usedPacket_ ? "packet" : "single";
+    if (variant_ == Variant::Auto && !traced_) v = "auto";
+    return fmt::format("{} {}{}", IsaName(isa_), v, config_.precision == Precision::Fast ? " fast" : "");
+  }
+
+ private:
+  TraceConfig config_;
+  Isa isa_;
+  Variant variant_;
+  AccelData data_;
+  std::vector<std::uint32_t> primIds_;
+  std::vector<ConeData> cones_;
+  std::unique_ptr<WideBVHBase> wide_;
+  KernelScene sc_;
+  KernelFn packetFn_ = nullptr, singleFn_ = nullptr;
+  int width_ = 4;
+  bool usedPacket_ = false;
+  bool traced_ = false;
+
+  // Traces positions [0, n) of `order`, or when order is empty of the rays
+  // themselves (in image tiles when imageWidth > 0, KernelJob), parallel over
+  // blocks of whole packets: small enough to balance the threads, large
+  // enough to amortise the scheduling.
+  void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits,
+           const std::vector<std::uint32_t>& order, std::uint32_t imageWidth, bool occlusion, KernelStats* sum) const
+  {
+    const std::size_t n = order.empty() ? rays.size() : order.size();
+    const std::size_t unit = packet ? std::size_t(width_) : 1;
+    const std::size_t nUnits = (n + unit - 1) / unit;
+    const std::size_t grain = packet ? 16 : 64;
+    tbb::enumerable_thread_specific<KernelStats> local;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      KernelJob job;
+      job.rays = rays.data();
+      job.hits = hits.data();
+      job.order = order.empty() ? nullptr : order.data();
+      job.imageWidth = imageWidth;
+      job.begin = r.begin() * unit;
+      job.end = std::min(r.end() * unit, n);
+      job.occlusion = occlusion ? 1 : 0;
+      job.stats = sum ? &local.local() : nullptr;
+      fn(sc_, job);
+    });
+    if (sum) {
+      for (const KernelStats& s : local) Add(*sum, s);
+    }
+  }
+
+  static void Add(KernelStats& a, const KernelStats& b)
+  {
+    a.rays += b.rays;
+    a.nIT += b.nIT;
+    a.nTS += b.nTS;
+    a.nLeaves += b.nLeaves;
+    a.nEmptyLeaves += b.nEmptyLeaves;
+  }
+
+  // `auto` on an incoherent ray set decides by measurement: blocks of rays
+  // spread over the whole set are traced alternately with packets and one
+  // ray at a time (for real: their answers are kept), and the variant that
+  // took less time traces the rest, whose positions go to `rest`. Which
+  // variant wins depends on the scene as much as on the rays (docs/SIMD.md:
+  // on random rays packets win on balls and tree, single rays on gears and
+  // teapot), so no ray-set statistic predicts it as well.
+  bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, KernelStats* sum,
+             std::vector<std::uint32_t>& rest) const
+  {
+    const std::size_t nBlocks = rays.size() / kPilotBlock;
+    const std::size_t nPilot = std::min<std::size_t>(2 * kPilotBlocksEach, nBlocks);
+    const std::size_t stride = nBlocks / nPilot;
+    std::vector<char> isPilot(nBlocks, 0);
+    double seconds[2] = {0.0, 0.0};
+    KernelStats pilotStats;
+    for (std::size_t i = 0; i < nPilot; ++i) {
+      const std::size_t b = i * stride;
+      isPilot[b] = 1;
+      KernelJob job;
+      job.rays = rays.data();
+      job.hits = hits.data();
+      job.begin = b * kPilotBlock;
+      job.end = job.begin + kPilotBlock;
+      job.occlusion = occlusion ? 1 : 0;
+      job.stats = sum ? &pilotStats : nullptr;
+      const int single = static_cast<int>(i & 1);
+      const auto t0 = std::chrono::steady_clock::now();
+      (single ? singleFn_ : packetFn_)(sc_, job);
+      seconds[single] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    if (sum) Add(*sum, pilotStats);
+    rest.clear();
+    rest.reserve(rays.size() - nPilot * kPilotBlock);
+    for (std::size_t r = 0; r < rays.size(); ++r)
+      if (r / kPilotBlock >= nBlocks || !isPilot[r / kPilotBlock]) rest.push_back(static_cast<std::uint32_t>(r));
+    return seconds[0] <= seconds[1];
+  }
+};
+
+// What the SIMD backend hands to the scalar one, named in VariantName.
+class DelegatingTracer final : public Tracer {
+ public:
+  DelegatingTracer(std::unique_ptr<Tracer> inner, std::string why) : inner_(std::move(inner)), why_(std::move(why))
+  {
+    info_ = inner_->Info();
+  }
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    inner_->Trace(rays, hits, occlusion, stats);
+  }
+  std::string DeviceName() const override { return inner_->DeviceName(); }
+  std::string VariantName() const override { return fmt::format("scalar ray ({})", why_); }
+
+ private:
+  std::unique_ptr<Tracer> inner_;
+  std::string why_;
+};
+
+}  // namespace
+
+}  // namespace simd
+
+std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config)
+{
+  using namespace simd;
+  const Isa isa = ParseIsa(config.isa);
+  const Variant variant = ParseVariant(config.variant);
+  std::string why;
+  if (isa == Isa::Scalar)
+    why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
+  else if (config.precision == Precision::Fp64)
+    why = "fp64 delegated";
+  else if (config.accel != AccelKind::BVH)
+    why = fmt::format("{} delegated", AccelKindName(config.accel));
+  if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
+  return std::make_unique<SimdTracer>(scene, config, isa, variant);
+}
+
+}  // namespace cr

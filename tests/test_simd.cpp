@@ -1,0 +1,317 @@
+// The SIMD backend against the fp64 reference and against the scalar
+// backend: every SPD scene x ray kind x ISA this CPU has x variant, 0 wrong,
+// and the scalar backend's primitive ids (closest hits: the same t to 2 ulp;
+// only exact ties may name another primitive, and they are counted).
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "core/error.h"
+#include "simd/isa.h"
+#include "simd/ray_order.h"
+#include "test_util.h"
+
+using namespace cr;
+
+namespace {
+
+// Structures with a SIMD traversal (grid and octree join next).
+const AccelKind kSimdAccels[] = {AccelKind::BVH};
+const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
+const char* const kVariants[] = {"packet", "single"};
+
+std::vector<std::string> AvailableIsas()
+{
+  std::vector<std::string> out;
+  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back("sse4");
+  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back("avx2");
+  return out;
+}
+
+std::int64_t UlpDistance(float a, float b)
+{
+  std::int32_t ia, ib;
+  std::memcpy(&ia, &a, 4);
+  std::memcpy(&ib, &b, 4);
+  // Map to a monotonic integer line (negative floats count down from -0).
+  const std::int64_t la = ia < 0 ? -std::int64_t(ia & 0x7FFFFFFF) : ia;
+  const std::int64_t lb = ib < 0 ? -std::int64_t(ib & 0x7FFFFFFF) : ib;
+  return la > lb ? la - lb : lb - la;
+}
+
+struct Comparison {
+  std::uint64_t differentPrim = 0;     // closest hit: other primitive, t not equal (a failure)
+  std::uint64_t exactTies = 0;         // closest hit: other primitive at exactly the same t
+  std::uint64_t tBeyond2Ulp = 0;       // same primitive, t more than 2 ulp apart (a failure)
+  std::uint64_t otherOccluder = 0;     // occlusion: both occluded, another occluder (allowed)
+  std::uint64_t occlusionDiffers = 0;  // occlusion: occluded vs free (a failure)
+  std::uint64_t firstBad = ~0ull;
+};
+
+Comparison CompareWithScalar(const std::vector<HitRecord>& scalar, const std::vector<HitRecord>& simd, bool occlusion)
+{
+  Comparison c;
+  REQUIRE(scalar.size() == simd.size());
+  for (std::size_t i = 0; i < scalar.size(); ++i) {
+    const HitRecord& a = scalar[i];
+    const HitRecord& b = simd[i];
+    bool bad = false;
+    if (occlusion) {
+      if ((a.prim == CR_NO_HIT) != (b.prim == CR_NO_HIT))
+        bad = true, ++c.occlusionDiffers;
+      else if (a.prim != b.prim)
+        ++c.otherOccluder;
+    } else if (a.prim != b.prim) {
+      if (a.t == b.t)
+        ++c.exactTies;
+      else
+        bad = true, ++c.differentPrim;
+    } else if (a.prim != CR_NO_HIT && UlpDistance(a.t, b.t) > 2) {
+      bad = true, ++c.tBeyond2Ulp;
+    }
+    if (bad && c.firstBad == ~0ull) c.firstBad = i;
+  }
+  return c;
+}
+
+std::vector<HitRecord> TraceWith(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
+                                 bool occlusion, std::string* variantName = nullptr)
+{
+  auto tracer = CreateTracer(scene, cfg);
+  std::vector<HitRecord> hits;
+  tracer->Trace(rays, hits, occlusion, nullptr);
+  if (variantName) *variantName = tracer->VariantName();
+  return hits;
+}
+
+}  // namespace
+
+TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the reference and the scalar backend")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) {
+    MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2; the simd backend runs its scalar fallback only");
+    return;
+  }
+  std::uint64_t totalTies = 0, totalOtherOccluders = 0, totalRays = 0;
+  for (const std::string& name : test::SpdScenes()) {
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    for (RayKind kind : kKinds) {
+      const auto rays = test::MakeRays(scene, kind, 40);
+      const bool occlusion = test::IsOcclusion(kind);
+      for (AccelKind accel : kSimdAccels) {
+        TraceConfig scalarCfg;
+        scalarCfg.backend = Backend::Scalar;
+        scalarCfg.accel = accel;
+        const auto scalarHits = TraceWith(scene, scalarCfg, rays, occlusion);
+        for (const std::string& isa : isas) {
+          for (const char* variant : kVariants) {
+            TraceConfig cfg;
+            cfg.backend = Backend::Simd;
+            cfg.accel = accel;
+            cfg.isa = isa;
+            cfg.variant = variant;
+            std::vector<HitRecord> hits;
+            const auto r = test::CheckTracer(scene, cfg, rays, occlusion, &hits);
+            const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
+            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant, ": ", r.wrong,
+                 " wrong of ", r.rays, "; vs scalar: ", c.differentPrim, " other prim, ", c.tBeyond2Ulp, " t > 2 ulp, ",
+                 c.occlusionDiffers, " occlusion differs (first ray ", c.firstBad, ")");
+            CHECK(r.rays == rays.size());
+            CHECK(r.wrong == 0);
+            CHECK(c.differentPrim == 0);
+            CHECK(c.tBeyond2Ulp == 0);
+            CHECK(c.occlusionDiffers == 0);
+            totalTies += c.exactTies;
+            totalOtherOccluders += c.otherOccluder;
+            totalRays += rays.size();
+          }
+        }
+      }
+    }
+  }
+  MESSAGE("simd vs scalar over ", totalRays, " rays: ", totalTies, " exact ties named another primitive, ",
+          totalOtherOccluders, " occlusion queries named another occluder");
+}
+
+TEST_CASE("simd: fast precision returns the scalar fast kernels' answers")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) return;
+  for (const char* name : {"balls", "gears", "tree", "lattice"}) {
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Random}) {
+      const auto rays = test::MakeRays(scene, kind, 32);
+      const bool occlusion = test::IsOcclusion(kind);
+      TraceConfig scalarCfg;
+      scalarCfg.backend = Backend::Scalar;
+      scalarCfg.precision = Precision::Fast;
+      const auto scalarHits = TraceWith(scene, scalarCfg, rays, occlusion);
+      for (const std::string& isa : isas) {
+        for (const char* variant : kVariants) {
+          TraceConfig cfg = scalarCfg;
+          cfg.backend = Backend::Simd;
+          cfg.isa = isa;
+          cfg.variant = variant;
+          std::string vn;
+          const auto hits = TraceWith(scene, cfg, rays, occlusion, &vn);
+          const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
+          INFO(name, " ", RayKindName(kind), " ", vn);
+          CHECK(vn == isa + " " + variant + " fast");
+          CHECK(c.differentPrim == 0);
+          CHECK(c.tBeyond2Ulp == 0);
+          CHECK(c.occlusionDiffers == 0);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("simd: unified hits, statistics and the auto variant")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) return;
+  const Scene& scene = test::CachedScene(test::SpdPath("teapot"));
+  const auto primary = test::MakeRays(scene, RayKind::Primary, 48);
+  const auto random = test::MakeRays(scene, RayKind::Random, 48);
+
+  TraceConfig scalarCfg;
+  scalarCfg.backend = Backend::Scalar;
+  scalarCfg.unifiedHits = true;
+  scalarCfg.stats = true;
+  const auto scalarHits = TraceWith(scene, scalarCfg, primary, false);
+
+  for (const std::string& isa : isas) {
+    for (const char* variant : kVariants) {
+      TraceConfig cfg = scalarCfg;
+      cfg.backend = Backend::Simd;
+      cfg.isa = isa;
+      cfg.variant = variant;
+      auto tracer = CreateTracer(scene, cfg);
+      std::vector<HitRecord> hits;
+      TraceStatsSum st;
+      tracer->Trace(primary, hits, false, &st);
+      INFO(isa, " ", variant);
+      // Unified form: piece index and barycentrics of every triangle piece, bit for bit.
+      REQUIRE(hits.size() == scalarHits.size());
+      std::size_t same = 0;
+      for (std::size_t i = 0; i < hits.size(); ++i)
+        same += std::memcmp(&hits[i], &scalarHits[i], sizeof(HitRecord)) == 0;
+      CHECK(same == hits.size());
+      CHECK(st.rays == primary.size());
+      CHECK(st.nTS >= st.rays / 2);
+      CHECK(st.nIT > 0);
+      CHECK(st.nLeaves > 0);
+      CHECK(st.nLeaves <= st.nTS);
+      CHECK(st.nEmptyLeaves == 0);
+    }
+    TraceConfig cfg;
+    cfg.backend = Backend::Simd;
+    cfg.isa = isa;
+    std::string vn;
+    TraceWith(scene, cfg, primary, false, &vn);
+    CHECK(vn == isa + " packet");
+    TraceWith(scene, cfg, random, false, &vn);
+    CHECK(vn == isa + " single");
+  }
+}
+
+TEST_CASE("simd: ISA and variant selection, delegation and errors")
+{
+  const Scene& scene = test::CachedScene(test::SpdPath("jacks"));
+  TraceConfig cfg;
+  cfg.backend = Backend::Simd;
+  cfg.isa = "neon";
+  CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);
+  cfg.isa = "";
+  cfg.variant = "sideways";
+  CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);
+  cfg.variant = "";
+  for (const char* isa : {"sse4", "avx2"}) {
+    cfg.isa = isa;
+    const simd::Isa want = std::string(isa) == "avx2" ? simd::Isa::Avx2 : simd::Isa::Sse4;
+    const bool supported = simd::IsaSupported(want);
+    if (supported)
+      CHECK_NOTHROW(CreateTracer(scene, cfg));
+    else
+      CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);
+  }
+  // What the SIMD backend hands to the scalar one is named.
+  cfg.isa = "scalar";
+  CHECK(CreateTracer(scene, cfg)->VariantName() == "scalar ray (--isa scalar)");
+  cfg.isa = "";
+  cfg.precision = Precision::Fp64;
+  CHECK(CreateTracer(scene, cfg)->VariantName() == "scalar ray (fp64 delegated)");
+}
+
+TEST_CASE("simd: a scene without primitives answers misses")
+{
+  Scene scene;
+  ParseNFF("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.1\nresolution 8 8\n", "empty.nff", scene);
+  REQUIRE(scene.NumUnified() == 0);
+  std::vector<RayRecord> rays(13, RayRecord{{0.0f, 0.0f, 5.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY});
+  for (const std::string& isa : AvailableIsas()) {
+    for (const char* variant : kVariants) {
+      TraceConfig cfg;
+      cfg.backend = Backend::Simd;
+      cfg.isa = isa;
+      cfg.variant = variant;
+      for (bool occlusion : {false, true}) {
+        const auto hits = TraceWith(scene, cfg, rays, occlusion);
+        REQUIRE(hits.size() == rays.size());
+        for (const HitRecord& h : hits) {
+          CHECK(h.prim == CR_NO_HIT);
+          CHECK(std::isinf(h.t));
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("simd: packet formation finds the image of primary rays and tiles it")
+{
+  const Scene& scene = test::CachedScene(test::SpdPath("gears"));
+  RayGenOptions g;
+  g.kind = RayKind::Primary;
+  g.width = 24;
+  g.height = 10;
+  const auto primary = GenerateRays(scene, test::CachedReference(scene), g);
+  CHECK(simd::DetectImageWidth(primary) == 24);
+  CHECK(simd::DetectImageWidth(test::MakeRays(scene, RayKind::Diffuse, 16)) == 0);
+  CHECK(simd::DetectImageWidth(test::MakeRays(scene, RayKind::Random, 16)) == 0);
+  const auto order = simd::TileOrder(primary.size(), 24, 4, 2);
+  REQUIRE(order.size() == primary.size());
+  // A permutation whose first packet is the 4x2 tile at the top left.
+  std::vector<std::uint32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 0; i < sorted.size(); ++i) CHECK(sorted[i] == i);
+  const std::uint32_t firstTile[8] = {0, 1, 2, 3, 24, 25, 26, 27};
+  for (int i = 0; i < 8; ++i) CHECK(order[std::size_t(i)] == firstTile[i]);
+}
+
+TEST_CASE("simd: auto on a large incoherent set (pilot blocks, then the rest) answers every ray once")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) return;
+  const Scene& scene = test::CachedScene(test::SpdPath("balls"));
+  const auto rays = test::MakeRays(scene, RayKind::Diffuse, 260);  // 67600 rays: above the pilot threshold
+  TraceConfig scalarCfg;
+  scalarCfg.backend = Backend::Scalar;
+  const auto scalarHits = TraceWith(scene, scalarCfg, rays, false);
+  for (const std::string& isa : isas) {
+    TraceConfig cfg;
+    cfg.backend = Backend::Simd;
+    cfg.isa = isa;
+    cfg.stats = true;
+    auto tracer = CreateTracer(scene, cfg);
+    std::vector<HitRecord> hits(rays.size(), HitRecord{-1.0f, 12345u, -1.0f, -1.0f});
+    TraceStatsSum st;
+    tracer->Trace(rays, hits, false, &st);
+    INFO(isa, " ", tracer->VariantName());
+    CHECK((tracer->VariantName() == isa + " packet" || tracer->VariantName() == isa + " single"));
+    CHECK(st.rays == rays.size());
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < hits.size(); ++i) same += std::memcmp(&hits[i], &scalarHits[i], sizeof(HitRecord)) == 0;
+    CHECK(same == rays.size());
+  }
+}

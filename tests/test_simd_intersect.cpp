@@ -1,0 +1,406 @@
+// The SIMD intersectors lane by lane against the scalar kernels, on named
+// hard inputs (Embree's verify style): direction components of +0 and -0,
+// origins on slab planes, rays exactly along an edge shared by two triangles
+// and through a shared vertex, tangent rays to spheres and cylinders, rays
+// parallel to a cone's generator (its linear case), degenerate cones; then
+// seeded random rays around each primitive. Both forms are probed: the packet
+// form (N rays against one primitive) and the single-ray form (one ray
+// against a pack of K primitives). Answers must agree bit for bit.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include <doctest/doctest.h>
+#include <fmt/format.h>
+
+#include "scene/scene.h"
+#include "simd/bvh_wide_builder.h"
+#include "simd/isa.h"
+#include "simd/simd_kernels.h"
+
+// The scalar kernels as the oracle, robust and fast, each in its own namespace.
+namespace cr::simd_oracle_robust {
+typedef float real;
+#include "kernels/intersect.h"
+}  // namespace cr::simd_oracle_robust
+#undef CELLRAY_KERNELS_INTERSECT_H
+#undef CELLRAY_KERNELS_RAY_H
+#define CR_FAST 1
+namespace cr::simd_oracle_fast {
+typedef float real;
+#include "kernels/intersect.h"
+}  // namespace cr::simd_oracle_fast
+#undef CR_FAST
+
+using namespace cr;
+using simd::KernelProbes;
+using simd::ProbeResult;
+
+namespace {
+
+RayRecord MakeRay(float ox, float oy, float oz, float dx, float dy, float dz, float tmin = 0.0f, float tmax = INFINITY)
+{
+  return RayRecord{{ox, oy, oz}, tmin, {dx, dy, dz}, tmax};
+}
+
+std::uint32_t Bits(float x)
+{
+  std::uint32_t b;
+  std::memcpy(&b, &x, 4);
+  return b;
+}
+
+// The test scene: two triangles sharing the diagonal of the unit square,
+// spheres, cylinders and cones, including degenerate ones.
+struct ProbeScene {
+  Scene scene;
+  std::vector<simd::ConeData> cones;
+  std::vector<std::uint32_t> ids;
+  simd::KernelScene sc;
+
+  ProbeScene()
+  {
+    scene.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f});
+    scene.spheres.push_back(Sphere{{3.0f, 0.5f, -2.0f}, 0.25f});
+    scene.spheres.push_back(Sphere{{1000.0f, 2000.0f, 1.0e5f}, 1000.0f});  // far, large
+    scene.spheres.push_back(Sphere{{0.5f, 0.5f, 0.5f}, 0.0f});             // radius 0
+    scene.spheres.push_back(Sphere{{0.1f, -0.3f, 0.7f}, 0.7f});            // radii whose squares round
+    scene.spheres.push_back(Sphere{{-0.6f, 0.2f, -0.1f}, 1.3f});
+    scene.spheres.push_back(Sphere{{0.3f, 0.3f, 0.3f}, 0.123456f});
+    scene.triangles.push_back(Triangle{{0.0f, 0.0f, 0.0f}, 0u, {1.0f, 0.0f, 0.0f}, 0u, {1.0f, 1.0f, 0.0f}, 0u});
+    scene.triangles.push_back(Triangle{{0.0f, 0.0f, 0.0f}, 0u, {1.0f, 1.0f, 0.0f}, 0u, {0.0f, 1.0f, 0.0f}, 0u});
+    scene.triangles.push_back(Triangle{{0.2f, 0.3f, 0.7f}, 0u, {0.9f, 0.1f, 0.4f}, 0u, {0.4f, 0.8f, 0.1f}, 0u});
+    scene.triangles.push_back(Triangle{{0.0f, 0.0f, 0.0f}, 0u, {1.0f, 1.0f, 1.0f}, 0u, {2.0f, 2.0f, 2.0f}, 0u});
+    scene.cones.push_back(Cone{{0.0f, 0.0f, 0.0f}, 1.0f, {0.0f, 0.0f, 2.0f}, 1.0f});   // cylinder
+    scene.cones.push_back(Cone{{0.0f, 0.0f, 0.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 0.0f});   // cone to a point
+    scene.cones.push_back(Cone{{1.0f, 2.0f, 3.0f}, 0.5f, {2.0f, 1.0f, 5.0f}, 0.25f});  // oblique frustum
+    scene.cones.push_back(Cone{{1.0f, 1.0f, 1.0f}, 0.5f, {1.0f, 1.0f, 1.0f}, 0.5f});   // H = 0
+    cones = simd::MakeConeData(scene);
+    ids.resize(scene.NumUnified());
+    for (std::uint32_t g = 0; g < ids.size(); ++g) ids[g] = g;
+    sc.spheres = scene.spheres.data();
+    sc.triangles = scene.triangles.data();
+    sc.cones = cones.data();
+    sc.counts = scene.Counts();
+    sc.primIds = ids.data();
+  }
+};
+
+// Prim_Intersect of the scalar kernels from a fresh hit at the ray's tmax.
+ProbeResult ScalarPrim(const ProbeScene& ps, const RayRecord& rec, std::uint32_t g, bool fast)
+{
+  ProbeResult out;
+  if (fast) {
+    namespace k = simd_oracle_fast;
+    k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
+                   ps.sc.counts.nSpheres,   ps.sc.counts.nTriangles,   ps.sc.counts.nCones};
+    k::Ray ray;
+    k::Ray_Init(&ray, &rec);
+    k::Hit h;
+    k::Hit_Init(&h, &ray);
+    out.hit = k::Prim_Intersect(&pv, g, &ray, &h);
+    out.t = h.t;
+    out.u = h.u;
+    out.v = h.v;
+  } else {
+    namespace k = simd_oracle_robust;
+    k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
+                   ps.sc.counts.nSpheres,   ps.sc.counts.nTriangles,   ps.sc.counts.nCones};
+    k::Ray ray;
+    k::Ray_Init(&ray, &rec);
+    k::Hit h;
+    k::Hit_Init(&h, &ray);
+    out.hit = k::Prim_Intersect(&pv, g, &ray, &h);
+    out.t = h.t;
+    out.u = h.u;
+    out.v = h.v;
+  }
+  return out;
+}
+
+ProbeResult ScalarBox(const float lo[3], const float hi[3], const RayRecord& rec, bool fast)
+{
+  ProbeResult out;
+  if (fast) {
+    namespace k = simd_oracle_fast;
+    k::Ray ray;
+    k::Ray_Init(&ray, &rec);
+    out.hit = k::Box_Intersect(lo, hi, &ray, ray.tmin, ray.tmax, &out.t);
+  } else {
+    namespace k = simd_oracle_robust;
+    k::Ray ray;
+    k::Ray_Init(&ray, &rec);
+    out.hit = k::Box_Intersect(lo, hi, &ray, ray.tmin, ray.tmax, &out.t);
+  }
+  return out;
+}
+
+struct Tally {
+  std::uint64_t lanes = 0, hits = 0, mismatches = 0;
+};
+
+void Compare(const ProbeResult& want, const ProbeResult& got, bool compareUV, Tally& tally, const char* what,
+             const RayRecord& r, std::uint32_t g)
+{
+  ++tally.lanes;
+  tally.hits += want.hit ? 1 : 0;
+  bool same = (want.hit != 0) == (got.hit != 0);
+  if (same && want.hit) {
+    same = Bits(want.t) == Bits(got.t);
+    if (compareUV) same = same && Bits(want.u) == Bits(got.u) && Bits(want.v) == Bits(got.v);
+  }
+  if (!same) {
+    ++tally.mismatches;
+    if (tally.mismatches <= 5)
+      MESSAGE(
+          fmt::format("{} g={} org=({:a},{:a},{:a}) dir=({:a},{:a},{:a}): scalar hit={} t={:a} u={:a} v={:a}; "
+                      "simd hit={} t={:a} u={:a} v={:a}",
+                      what, g, r.org[0], r.org[1], r.org[2], r.dir[0], r.dir[1], r.dir[2], want.hit, want.t, want.u,
+                      want.v, got.hit, got.t, got.u, got.v));
+  }
+}
+
+// Every ray against primitives [gBegin, gEnd) in both forms.
+Tally ProbePrims(const KernelProbes& pr, const ProbeScene& ps, const std::vector<RayRecord>& rays, std::uint32_t gBegin,
+                 std::uint32_t gEnd, bool fast)
+{
+  Tally tally;
+  const bool uv = gBegin >= ps.sc.counts.nSpheres && gBegin < ps.sc.counts.nSpheres + ps.sc.counts.nTriangles;
+  // Packet form: N rays per call, the last ray repeated to fill the packet.
+  std::vector<ProbeResult> out(std::size_t(pr.width));
+  for (std::uint32_t g = gBegin; g < gEnd; ++g) {
+    for (std::size_t i = 0; i < rays.size(); i += std::size_t(pr.width)) {
+      std::vector<RayRecord> lanes(std::size_t(pr.width));
+      for (int l = 0; l < pr.width; ++l) lanes[std::size_t(l)] = rays[std::min(i + std::size_t(l), rays.size() - 1)];
+      pr.packetPrim(ps.sc, lanes.data(), g, fast, out.data());
+      for (int l = 0; l < pr.width && i + std::size_t(l) < rays.size(); ++l)
+        Compare(ScalarPrim(ps, lanes[std::size_t(l)], g, fast), out[std::size_t(l)], uv, tally, "packet",
+                lanes[std::size_t(l)], g);
+    }
+  }
+  // Single-ray form: the primitives in packs of K, CR_NO_HIT padding.
+  std::vector<ProbeResult> pout(std::size_t(pr.packWidth));
+  for (const RayRecord& r : rays) {
+    for (std::uint32_t g0 = gBegin; g0 < gEnd; g0 += std::uint32_t(pr.packWidth)) {
+      std::vector<std::uint32_t> gs(std::size_t(pr.packWidth), CR_NO_HIT);
+      for (int l = 0; l < pr.packWidth && g0 + std::uint32_t(l) < gEnd; ++l) gs[std::size_t(l)] = g0 + std::uint32_t(l);
+      pr.singlePrims(ps.sc, r, gs.data(), fast, pout.data());
+      for (int l = 0; l < pr.packWidth; ++l) {
+        if (gs[std::size_t(l)] == CR_NO_HIT) {
+          CHECK(pout[std::size_t(l)].hit == 0);  // padding never hits
+          continue;
+        }
+        Compare(ScalarPrim(ps, r, gs[std::size_t(l)], fast), pout[std::size_t(l)], uv, tally, "single", r,
+                gs[std::size_t(l)]);
+      }
+    }
+  }
+  return tally;
+}
+
+std::vector<KernelProbes> AvailableProbes()
+{
+  std::vector<KernelProbes> out;
+#if defined(CELLRAY_SIMD_X86)
+  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back(simd::sse4::Probes());
+  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back(simd::avx2::Probes());
+#endif
+  if (out.empty()) MESSAGE("SKIPPED: no SIMD ISA on this CPU");
+  return out;
+}
+
+// Seeded random rays aimed at points of a box, from all around it.
+std::vector<RayRecord> RaysAround(float cx, float cy, float cz, float size, int n, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<RayRecord> rays;
+  for (int i = 0; i < n; ++i) {
+    const float tx = cx + size * u(rng), ty = cy + size * u(rng), tz = cz + size * u(rng);
+    const float ox = cx + 4.0f * size * u(rng), oy = cy + 4.0f * size * u(rng), oz = cz + 4.0f * size * u(rng);
+    rays.push_back(MakeRay(ox, oy, oz, tx - ox, ty - oy, tz - oz));
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("simd intersectors: shared triangle edge and vertex, signed-zero directions (watertight)")
+{
+  ProbeScene ps;
+  const std::uint32_t t0 = ps.sc.counts.nSpheres, tEnd = t0 + ps.sc.counts.nTriangles;
+  std::vector<RayRecord> rays;
+  // Straight down onto the shared diagonal x = y and the shared vertices,
+  // with every sign of zero in the lateral components.
+  for (float p : {0.0f, 0.1f, 0.25f, 0.5f, 0.75f, 1.0f}) {
+    for (float zx : {0.0f, -0.0f})
+      for (float zy : {0.0f, -0.0f}) {
+        rays.push_back(MakeRay(p, p, 1.0f, zx, zy, -1.0f));
+        rays.push_back(MakeRay(p, p, -1.0f, zx, zy, 1.0f));
+        rays.push_back(MakeRay(p, 1.0f, 1.0f, zx, zy, -1.0f));  // outer edge y = 1
+      }
+  }
+  // Oblique rays through points of the diagonal, and a ray lying in the plane.
+  for (float p : {0.125f, 0.5f, 0.875f}) {
+    rays.push_back(MakeRay(p + 0.3f, p - 0.2f, 1.0f, -0.3f, 0.2f, -1.0f));
+    rays.push_back(MakeRay(p - 0.5f, p + 0.5f, 0.5f, 0.5f, -0.5f, -0.5f));
+  }
+  rays.push_back(MakeRay(-1.0f, -1.0f, 0.0f, 1.0f, 1.0f, 0.0f));
+  rays.push_back(MakeRay(-1.0f, -1.0f, 0.0f, 1.0f, 1.0f, -0.0f));
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (bool fast : {false, true}) {
+      const Tally t = ProbePrims(pr, ps, rays, t0, tEnd, fast);
+      INFO("width ", pr.width, fast ? " fast" : " robust");
+      CHECK(t.mismatches == 0);
+      CHECK(t.hits > 0);
+    }
+    // Watertight: a ray straight down onto the shared diagonal hits at least
+    // one of the two triangles (robust mode), in the SIMD kernels too.
+    for (float p : {0.1f, 0.25f, 0.5f, 0.75f}) {
+      std::vector<RayRecord> lanes(std::size_t(pr.width), MakeRay(p, p, 1.0f, -0.0f, 0.0f, -1.0f));
+      std::vector<ProbeResult> a(std::size_t(pr.width)), b(std::size_t(pr.width));
+      pr.packetPrim(ps.sc, lanes.data(), t0, false, a.data());
+      pr.packetPrim(ps.sc, lanes.data(), t0 + 1, false, b.data());
+      CHECK((a[0].hit || b[0].hit));
+      CHECK(a[0].t == doctest::Approx(1.0f));
+    }
+  }
+}
+
+TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
+{
+  ProbeScene ps;
+  const float up = std::nextafter(1.0f, 2.0f), down = std::nextafter(1.0f, 0.0f);
+  std::vector<RayRecord> rays;
+  for (float y : {1.0f, up, down, -1.0f, 0.0f})
+    for (float z0 : {0.0f, -0.0f}) {
+      rays.push_back(MakeRay(-5.0f, y, 0.0f, 1.0f, z0, z0));  // tangent when |y| = 1 (discriminant exactly 0)
+      rays.push_back(MakeRay(0.0f, y, -5.0f, z0, 0.0f, 1.0f));
+    }
+  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.3f, 0.4f, 0.5f));                // from the centre
+  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f));               // from the surface
+  rays.push_back(MakeRay(-1.0f, 0.0f, 0.0f, -1.0f, 0.0f, 0.0f, 0.0f, 5.0f));  // leaving it
+  rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f));                // zero direction
+  rays.push_back(MakeRay(1000.0f, 3000.0f, 0.0f, 0.0f, -0.0f, 1.0f));         // tangent to the far sphere
+  rays.push_back(MakeRay(3.0f, 0.75f, -10.0f, 0.0f, 0.0f, 1.0f));             // tangent to sphere 1
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (bool fast : {false, true}) {
+      const Tally t = ProbePrims(pr, ps, rays, 0, ps.sc.counts.nSpheres, fast);
+      INFO("width ", pr.width, fast ? " fast" : " robust");
+      CHECK(t.mismatches == 0);
+      CHECK(t.hits > 0);
+    }
+  }
+}
+
+TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerate cones")
+{
+  ProbeScene ps;
+  const std::uint32_t c0 = ps.sc.counts.nSpheres + ps.sc.counts.nTriangles, cEnd = c0 + ps.sc.counts.nCones;
+  std::vector<RayRecord> rays;
+  for (float z0 : {0.0f, -0.0f}) {
+    rays.push_back(MakeRay(-5.0f, 1.0f, 1.0f, 1.0f, z0, z0));     // tangent to the cylinder
+    rays.push_back(MakeRay(-5.0f, 0.5f, 1.0f, 1.0f, z0, z0));     // through it
+    rays.push_back(MakeRay(0.5f, 0.0f, -3.0f, z0, z0, 1.0f));     // parallel to the axis (A = 0, Bh = 0)
+    rays.push_back(MakeRay(2.0f, 0.0f, -1.0f, -1.0f, z0, 1.0f));  // parallel to the cone's generator (A = 0)
+    rays.push_back(MakeRay(2.0f, 0.5f, -1.0f, -1.0f, z0, 1.0f));
+    rays.push_back(MakeRay(1.0f, 1.0f, 0.0f, z0, z0, 1.0f));  // along the degenerate cone's axis
+  }
+  rays.push_back(MakeRay(0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 0.0f));  // from inside
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (bool fast : {false, true}) {
+      const Tally t = ProbePrims(pr, ps, rays, c0, cEnd, fast);
+      INFO("width ", pr.width, fast ? " fast" : " robust");
+      CHECK(t.mismatches == 0);
+      CHECK(t.hits > 0);
+    }
+  }
+}
+
+TEST_CASE("simd intersectors: seeded random rays around every primitive")
+{
+  ProbeScene ps;
+  const PrimCounts c = ps.sc.counts;
+  struct Group {
+    std::uint32_t begin, end;
+    float cx, cy, cz, size;
+  };
+  const Group groups[] = {{0, c.nSpheres, 0.0f, 0.0f, 0.0f, 1.2f},
+                          {c.nSpheres, c.nSpheres + c.nTriangles, 0.5f, 0.5f, 0.3f, 0.8f},
+                          {c.nSpheres + c.nTriangles, c.nSpheres + c.nTriangles + c.nCones, 0.5f, 0.5f, 1.5f, 2.0f}};
+  unsigned seed = 1;
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (const Group& gr : groups) {
+      const auto rays = RaysAround(gr.cx, gr.cy, gr.cz, gr.size, 400, seed++);
+      for (bool fast : {false, true}) {
+        const Tally t = ProbePrims(pr, ps, rays, gr.begin, gr.end, fast);
+        INFO("width ", pr.width, " group ", gr.begin, fast ? " fast" : " robust");
+        CHECK(t.mismatches == 0);
+        CHECK(t.hits > 20);
+      }
+    }
+  }
+}
+
+TEST_CASE("simd intersectors: slab tests with zero directions, origins on planes and flat boxes")
+{
+  const float boxes[][6] = {{0.0f, 0.0f, 0.0f, 1.0f, 1.0f, 1.0f},
+                            {0.0f, 0.0f, 0.5f, 1.0f, 1.0f, 0.5f},  // flat in z
+                            {-2.0f, -1.0f, -3.0f, 4.0f, 0.0f, -1.0f},
+                            {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY}};  // empty
+  std::vector<RayRecord> rays;
+  for (float z0 : {0.0f, -0.0f}) {
+    rays.push_back(MakeRay(0.0f, 0.5f, 0.5f, z0, z0, 1.0f));   // origin on the plane x = 0, parallel to it
+    rays.push_back(MakeRay(1.0f, 0.5f, -2.0f, z0, z0, 1.0f));  // on the plane x = 1
+    rays.push_back(MakeRay(0.5f, 0.5f, -2.0f, z0, z0, 1.0f));
+    rays.push_back(MakeRay(0.5f, 0.5f, 2.0f, z0, z0, -1.0f));
+    rays.push_back(MakeRay(0.5f, 0.5f, 0.5f, 1.0f, z0, z0));   // from inside, in the flat box's plane
+    rays.push_back(MakeRay(-1.0f, 1.0f, 0.5f, 1.0f, z0, z0));  // grazing the face y = 1
+    rays.push_back(MakeRay(-1.0f, -1.0f, -1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 1.0f));
+    rays.push_back(MakeRay(0.0f, 0.0f, 0.0f, z0, z0, z0));  // zero direction at a corner
+  }
+  const auto random = RaysAround(0.5f, 0.5f, 0.5f, 1.0f, 200, 99);
+  rays.insert(rays.end(), random.begin(), random.end());
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (bool fast : {false, true}) {
+      Tally tally;
+      for (const auto& b : boxes) {
+        const float lo[3] = {b[0], b[1], b[2]}, hi[3] = {b[3], b[4], b[5]};
+        // Packet form.
+        std::vector<ProbeResult> out(std::size_t(pr.width));
+        for (std::size_t i = 0; i < rays.size(); i += std::size_t(pr.width)) {
+          std::vector<RayRecord> lanes(std::size_t(pr.width));
+          for (int l = 0; l < pr.width; ++l)
+            lanes[std::size_t(l)] = rays[std::min(i + std::size_t(l), rays.size() - 1)];
+          pr.packetBox(lo, hi, lanes.data(), fast, out.data());
+          for (int l = 0; l < pr.width && i + std::size_t(l) < rays.size(); ++l)
+            Compare(ScalarBox(lo, hi, lanes[std::size_t(l)], fast), out[std::size_t(l)], false, tally, "packet box",
+                    lanes[std::size_t(l)], 0);
+        }
+        // Packet form with one ray in every lane (the packet's same-signs path).
+        for (const RayRecord& r : rays) {
+          std::vector<RayRecord> lanes(std::size_t(pr.width), r);
+          pr.packetBox(lo, hi, lanes.data(), fast, out.data());
+          const ProbeResult want = ScalarBox(lo, hi, r, fast);
+          for (int l = 0; l < pr.width; ++l) Compare(want, out[std::size_t(l)], false, tally, "uniform box", r, 0);
+        }
+        // Single-ray form: the box in every child slot of one node.
+        std::vector<float> los(std::size_t(3 * pr.width)), his(std::size_t(3 * pr.width));
+        for (int a = 0; a < 3; ++a)
+          for (int l = 0; l < pr.width; ++l) {
+            los[std::size_t(a * pr.width + l)] = lo[a];
+            his[std::size_t(a * pr.width + l)] = hi[a];
+          }
+        for (const RayRecord& r : rays) {
+          pr.singleBoxes(los.data(), his.data(), r, fast, out.data());
+          const ProbeResult want = ScalarBox(lo, hi, r, fast);
+          for (int l = 0; l < pr.width; ++l) Compare(want, out[std::size_t(l)], false, tally, "node box", r, 0);
+        }
+      }
+      INFO("width ", pr.width, fast ? " fast" : " robust");
+      CHECK(tally.mismatches == 0);
+      CHECK(tally.hits > 0);
+    }
+  }
+}
