@@ -16,7 +16,7 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* ref
   real stackT[CR_BVH_STACK];
   int sp = 0;
   real tEnter;
-  if (!Box_Intersect(nodes[0].bmin, nodes[0].bmax, ray, ray->tmin, hit->t, &tEnter)) return;
+  if (!Box_Intersect(nodes[0].bmin, nodes[0].bmax, ray, ray->tmin, Cull_Distance(hit->t), &tEnter)) return;
   uint ni = 0;
   for (;;) {
     CR_GLOBAL const BVHNode* n = nodes + ni;
@@ -31,8 +31,9 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* ref
     } else {
       uint c0 = n->first, c1 = n->first + 1;
       real t0, t1;
-      int h0 = Box_Intersect(nodes[c0].bmin, nodes[c0].bmax, ray, ray->tmin, hit->t, &t0);
-      int h1 = Box_Intersect(nodes[c1].bmin, nodes[c1].bmax, ray, ray->tmin, hit->t, &t1);
+      const real cull = Cull_Distance(hit->t);
+      int h0 = Box_Intersect(nodes[c0].bmin, nodes[c0].bmax, ray, ray->tmin, cull, &t0);
+      int h1 = Box_Intersect(nodes[c1].bmin, nodes[c1].bmax, ray, ray->tmin, cull, &t1);
       if (h0 && h1) {
         if (t1 < t0) {
           uint tc = c0;
@@ -57,7 +58,7 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* ref
     for (;;) {
       if (sp == 0) return;
       --sp;
-      if (stackT[sp] <= hit->t) {
+      if (stackT[sp] <= Cull_Distance(hit->t)) {
         ni = stackNode[sp];
         break;
       }

@@ -206,7 +206,7 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
     {
       Ray ray;
       BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      in = live & BVHPacket_Box(sNode, &ray, ray.tmin, sHit[lid]);
+      in = live & BVHPacket_Box(sNode, &ray, ray.tmin, Cull_Distance(sHit[lid]));
       const real w = (real)sNode[6] * ray.dir[0] + (real)sNode[7] * ray.dir[1] + (real)sNode[8] * ray.dir[2];
       vote = (w < (real)0.0f ? 1u : 0u) & (uint)in & interior;
     }

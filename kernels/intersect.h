@@ -257,6 +257,23 @@ CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
   return 0;
 }
 
+/* How far boxes and cells are still entered for a closest hit at t: a little
+ * beyond t. A primitive lying in a face of its box (coplanar faces of a mesh)
+ * can have a computed t a few ulps below the box's computed entry; culling
+ * that box at exactly t would make the nearest answer depend on which box was
+ * visited first, and so differ between traversal orders and backends.
+ * 8 ulps (2^-20 relative) covers it; fast mode culls at t. */
+CR_FUNC real Cull_Distance(real t)
+{
+#ifdef CR_FAST
+  return t;
+#elif defined(CR_FP64)
+  return t * ((real)1.0f + (real)0x1.0p-49f);
+#else
+  return t * (1.0f + 0x1.0p-20f);
+#endif
+}
+
 /* Conservative slab test of a box against [tmin, tmax] (Williams et al. 2005
  * with Ize 2013's rounding: the far distance is scaled by 1 + 2 gamma(3) so
  * that rounding can never cull a box the exact ray enters). 0 * inf = NaN on

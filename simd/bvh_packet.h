@@ -189,7 +189,7 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
   const std::uint32_t* refs = sc.refs;
   unsigned done = 0;  // occlusion: lanes with an occluder
   vfloat<N> tEnter;
-  vbool<N> m = active & PacketBox_Intersect<N, kFast>(nodes[0], P, H.t, tEnter);
+  vbool<N> m = active & PacketBox_Intersect<N, kFast>(nodes[0], P, CullDistance<kFast, N>(H.t), tEnter);
   unsigned bits = m.Bits();
   if (!bits) return;
   const unsigned activeBits = active.Bits();
@@ -216,8 +216,9 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
     } else {
       const std::uint32_t c0 = n.first, c1 = n.first + 1;
       vfloat<N> t0, t1;
-      const vbool<N> h0 = m & PacketBox_Intersect<N, kFast>(nodes[c0], P, H.t, t0);
-      const vbool<N> h1 = m & PacketBox_Intersect<N, kFast>(nodes[c1], P, H.t, t1);
+      const vfloat<N> cull = CullDistance<kFast, N>(H.t);
+      const vbool<N> h0 = m & PacketBox_Intersect<N, kFast>(nodes[c0], P, cull, t0);
+      const vbool<N> h1 = m & PacketBox_Intersect<N, kFast>(nodes[c1], P, cull, t1);
       const unsigned b0 = h0.Bits(), b1 = h1.Bits();
       if (b0 && b1) {
         const unsigned both = b0 & b1;
@@ -251,7 +252,7 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
     for (;;) {
       if (sp == 0) return;
       --sp;
-      bits = stack[sp].bits & ~done & (stack[sp].t <= H.t).Bits();
+      bits = stack[sp].bits & ~done & (stack[sp].t <= CullDistance<kFast, N>(H.t)).Bits();
       if (bits) {
         ni = stack[sp].node;
         m = vbool<N>::FromBits(bits);

@@ -180,7 +180,7 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
         farP[a] = nearHi[a] ? n.lower[a] : n.upper[a];
       }
       vfloat<N> tE;
-      unsigned bits = Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(hit.t), tE).Bits();
+      unsigned bits = Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(CullDistance<kFast>(hit.t)), tE).Bits();
       if (bits) {
         const int i0 = LowestBit(bits);
         bits &= bits - 1;
@@ -217,7 +217,7 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
     for (;;) {
       if (sp == 0) return;
       --sp;
-      if (stack[sp].t <= hit.t) {
+      if (stack[sp].t <= CullDistance<kFast>(hit.t)) {
         ref = stack[sp].ref;
         break;
       }

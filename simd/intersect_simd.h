@@ -21,6 +21,23 @@ CR_SIMD_INLINE vfloat<N> Dot3N(const vfloat<N> a[3], const vfloat<N> b[3])
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+// Cull_Distance of kernels/intersect.h: boxes are entered up to 8 ulps
+// beyond the closest hit so far, so the answer does not depend on the order
+// boxes are visited in (the scalar backend walks the binary BVH, the
+// single-ray path a BVH4/8).
+template <bool kFast>
+CR_SIMD_INLINE float CullDistance(float t)
+{
+  if constexpr (kFast) return t;
+  return t * (1.0f + 0x1.0p-20f);
+}
+template <bool kFast, int N>
+CR_SIMD_INLINE vfloat<N> CullDistance(vfloat<N> t)
+{
+  if constexpr (kFast) return t;
+  return t * vfloat<N>(1.0f + 0x1.0p-20f);
+}
+
 // Box_Intersect after the per-axis plane distances: n[a], f[a] are the near
 // and far distances of axis a (already chosen by the sign of inv). The
 // accumulation starts at -inf / +inf and drops NaN (0 * inf on a
