@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -210,4 +211,28 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
     CHECK(r.err.find("cannot write") != std::string::npos);
     CHECK_FALSE(fs::exists(out));
   }
+}
+
+TEST_CASE("no OpenCL platform: the default backend falls back to simd with one warning line")
+{
+  std::string scene = Write("fallback.nff", "s 0 0 0 1\n");
+  fs::create_directories(Dir() / "no-vendors");
+  const std::string env = "OCL_ICD_VENDORS=" + (Dir() / "no-vendors").string() + " ";
+  fs::path out = Dir() / "fb_out.txt", err = Dir() / "fb_err.txt";
+  std::string cmd = env + CELLRAY_BINARY + std::string(" trace ") + scene + " --rays " + Rays() + " >" + out.string() +
+                    " 2>" + err.string();
+  int status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  std::string e = Slurp(err), o = Slurp(out);
+  CHECK(e.find("cellray: warning: no OpenCL platform") == 0);
+  CHECK(std::count(e.begin(), e.end(), '\n') == 1);
+  CHECK(o.find("\"backend\":\"simd\"") != std::string::npos);
+  // Asking for OpenCL explicitly is a runtime failure (exit 1), not a fallback.
+  cmd = env + CELLRAY_BINARY + std::string(" trace ") + scene + " --rays " + Rays() + " --backend opencl >" +
+        out.string() + " 2>" + err.string();
+  status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  CHECK(Slurp(err).find("cellray: OpenCL: no platform found") == 0);
 }

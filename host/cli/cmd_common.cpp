@@ -10,7 +10,9 @@ namespace cr::cli {
 void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
 {
   cmd->add_option("--accel", o.accel, "Acceleration structure: grid, octree or bvh")->capture_default_str();
-  cmd->add_option("--backend", o.backend, "Backend: reference, scalar, simd or opencl")->capture_default_str();
+  cmd->add_option("--backend", o.backend,
+                  "Backend: auto (an OpenCL GPU if present, else simd), reference, scalar, simd or opencl")
+      ->capture_default_str();
   cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
   cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--grid-density", o.gridDensity, "Grid cells per primitive (0: default)")->check(CLI::NonNegativeNumber);
@@ -26,7 +28,7 @@ TraceConfig TracerOptions::ToConfig() const
 {
   TraceConfig c;
   c.accel = ParseAccelKind(accel);
-  c.backend = ParseBackend(backend);
+  c.backend = backend == "auto" ? ResolveAutoBackend(device) : ParseBackend(backend);
   c.precision = ParsePrecision(precision);
   c.threads = threads;
   c.params.gridDensity = gridDensity;

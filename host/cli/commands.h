@@ -16,7 +16,7 @@ using Run = std::function<int()>;
 // Options every command that builds a tracer shares.
 struct TracerOptions {
   std::string accel = "bvh";
-  std::string backend = "simd";
+  std::string backend = "auto";
   std::string precision = "robust";
   int threads = 0;
   double gridDensity = 0.0;

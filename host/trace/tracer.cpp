@@ -6,6 +6,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <cstdlib>
+
+#include "cl/cl_device.h"
 #include "core/error.h"
 #include "reference/reference.h"
 
@@ -29,6 +32,22 @@ const char* BackendName(Backend b)
     case Backend::OpenCL: return "opencl";
   }
   return "?";
+}
+
+Backend ResolveAutoBackend(const std::string& deviceSpec)
+{
+  const char* env = std::getenv("CELLRAY_DEVICE");
+  const bool named = !deviceSpec.empty() || (env && *env);
+  try {
+    std::vector<ClDevice> devices = ListClDevices();
+    if (named) return Backend::OpenCL;
+    for (const ClDevice& d : devices)
+      if (d.type == "gpu") return Backend::OpenCL;
+    return Backend::Simd;
+  } catch (const RuntimeError& e) {
+    Warn(fmt::format("no OpenCL platform ({}): using the simd backend", e.what()));
+    return Backend::Simd;
+  }
 }
 
 Precision ParsePrecision(const std::string& s)

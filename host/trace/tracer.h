@@ -19,6 +19,11 @@ namespace cr {
 
 enum class Backend { Reference, Scalar, Simd, OpenCL };
 Backend ParseBackend(const std::string& s);  // InputError on unknown names
+// The backend `auto` stands for: opencl when an OpenCL GPU exists (or a
+// device is named by `deviceSpec` / $CELLRAY_DEVICE), else simd. With no
+// OpenCL platform installed at all it falls back to simd with a one-line
+// warning.
+Backend ResolveAutoBackend(const std::string& deviceSpec);
 const char* BackendName(Backend b);
 
 enum class Precision { Fast, Robust, Fp64 };
