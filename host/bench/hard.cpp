@@ -163,6 +163,16 @@ std::string HardTableMarkdown(const std::vector<HardCaseResult>& results)
     cell[{r.caseName, col}] = &r;
   }
   std::sort(columns.begin(), columns.end());
+  // Columns where nothing ran (a backend or precision not available here)
+  // are left out and named below the table.
+  std::vector<Column> shown, hidden;
+  for (const Column& c : columns) {
+    bool ran = false;
+    for (const std::string& row : rows)
+      if (auto it = cell.find({row, c}); it != cell.end() && !it->second->skipped) ran = true;
+    (ran ? shown : hidden).push_back(c);
+  }
+  columns = shown;
   std::string out = "| case | rays |";
   for (const Column& c : columns) out += " " + ColumnName(c) + " |";
   out += "\n| --- | ---: |";
@@ -204,6 +214,16 @@ std::string HardTableMarkdown(const std::vector<HardCaseResult>& results)
   out += "\nCells: rays answered wrong (closest or occlusion); **bold**: a required combination that failed; "
          "ok: an expected error, no rays; n/a: the case does not apply to that structure; skip: not available "
          "here.\n";
+  if (!hidden.empty()) {
+    std::vector<std::string> names;
+    for (const Column& c : hidden) {
+      const std::string n = fmt::format("{} {}", BackendName(std::get<1>(c)), PrecisionName(std::get<2>(c)));
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+    }
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+    out += "Not shown (nothing ran, see the notes): " + list + ".\n";
+  }
   if (anyBeyond)
     out += "†: beyond float32 resolution, robust is reported but not held to 0 (fp64 is).\n";
   if (!anyFailure) out += "Every required combination (robust, fp64) has 0 wrong.\n";
@@ -221,8 +241,13 @@ std::string HardTableMarkdown(const std::vector<HardCaseResult>& results)
   for (const std::string& row : rows) {
     std::map<std::string, std::vector<std::string>> byNote;
     for (const HardCaseResult& r : results)
-      if (r.caseName == row && !r.skipped && !r.note.empty() && (r.wrong > 0 || r.rays == 0 || r.note.find("warning") != std::string::npos))
-        byNote[r.note.substr(0, 400)].push_back(ColumnName({r.accel, r.backend, r.precision}));
+      if (r.caseName == row && !r.skipped && !r.note.empty() &&
+          (r.wrong > 0 || r.rays == 0 || r.note.find("warning") != std::string::npos)) {
+        // Failures that are only reported: their first wrong ray is enough.
+        std::string note = r.note;
+        if (!r.required) note = note.substr(0, note.find("; ray "));
+        byNote[note.substr(0, 600)].push_back(ColumnName({r.accel, r.backend, r.precision}));
+      }
     for (const auto& [note, cols] : byNote) {
       std::string list = cols.size() > 3 ? fmt::format("{} combinations", cols.size()) : "";
       if (list.empty())

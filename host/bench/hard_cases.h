@@ -40,9 +40,7 @@ enum class Expect {
   // x* = o + t* d (the reference's first crossing). A hit (a miss is a
   // leak) naming a triangle that contains x* within check.h's delta(t*)
   // (a ray that slips through an edge and reports the far side fails
-  // this), and, for closest hits, reporting a point o + t d within delta(t)
-  // of that triangle. Distances to the triangle, not |t - t*|: on a sliver
-  // float32 places the plane well but t along an oblique ray poorly.
+  // this), and, for closest hits, |t - t*| |d| <= delta(t*).
   Closed,
   // Per ray: target[i] is the id the closest hit must report (occlusion:
   // occluded), with t within relTolT of the reference's, |t - t*| <=

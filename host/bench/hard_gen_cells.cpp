@@ -229,7 +229,8 @@ HardCase CellCase(AccelKind accel, const GenOptions& o)
     for (int a = 0; a < 3; ++a) inner[a] = Inner(first.axis[a]);
     scene = CellScene(inner);
     AccelData again = BuildAccel(*scene, accel, params);
-    if (!SameHeader(data, again)) throw RuntimeError("hard case cells: the planes moved when primitives were placed on them");
+    if (!SameHeader(data, again))
+      throw RuntimeError("hard case cells: the planes moved when primitives were placed on them");
     data = std::move(again);
   }
   HardCase c;

@@ -163,7 +163,8 @@ HardCase Planar(const GenOptions& o)
         const glm::dvec3 v[3] = {t0, t1, t2};
         const int e = int(rng.Below(3));
         p = v[e];
-        d = rng.Uniform() < 0.5 ? v[(e + 1) % 3] - v[e] : glm::dvec3(double(int(rng.Below(9)) - 4), double(int(rng.Below(9)) - 4), 0);
+        d = rng.Uniform() < 0.5 ? v[(e + 1) % 3] - v[e]
+                                : glm::dvec3(double(int(rng.Below(9)) - 4), double(int(rng.Below(9)) - 4), 0);
         break;
       }
       case 2: {  // in the pentagon's plane: between vertices (edges and diagonals) and random

@@ -174,7 +174,8 @@ HardCase RawPieces(const GenOptions& o)
   c.expect = Expect::Reference;
   Rng rng(703);
   const std::size_t n = o.quick ? 100 : 1000;
-  const glm::dvec3 aims[] = {{1, 1, 5}, {0, 0, 5}, {3, 0, 5}, {3.5, 0.5, 5}, {5, 5, 5}, {4, 0, 0}, {0, -8, 1.5}, {0, -8, 0}};
+  const glm::dvec3 aims[] = {{1, 1, 5}, {0, 0, 5},  {3, 0, 5},      {3.5, 0.5, 5},
+                             {5, 5, 5}, {4, 0, 0},  {0, -8, 1.5},   {0, -8, 0}};
   for (const glm::dvec3& p : aims)
     for (std::size_t k = 0; k < n; ++k) {
       glm::dvec3 d;
@@ -278,8 +279,9 @@ void AddDegenerateCases(std::vector<CaseSpec>& specs)
                    "NFF with a valid sphere (id 0), then a collinear triangle, a triangle with a repeated vertex, a "
                    "collinear quad, a sphere of radius 0, a cone with coincident ends, a cone with both radii 0, a "
                    "2-vertex polygon (ids 1..7: each skipped with a warning, id kept), then a hexagon with a repeated "
-                   "and a collinear vertex, a sphere, a triangle, a cone, a patch (ids 8..12) and a backstop box. Expect: at least 7 warnings; rays aimed at the valid primitives report their "
-                   "statement ids; all others the reference's answer; no NaN.",
+                   "and a collinear vertex, a sphere, a triangle, a cone, a patch (ids 8..12) and a backstop box. "
+                   "Expect: at least 7 warnings; rays aimed at the valid primitives report their statement ids; all "
+                   "others the reference's answer; no NaN.",
                    false, [](AccelKind, const GenOptions& o) { return Loader(o); }});
   specs.push_back({"degenerate/raw-pieces", "degenerate",
                    "Zero-area triangles (collinear, repeated vertex, a point), a sphere of radius 0 and a cone with "

@@ -171,7 +171,8 @@ std::vector<RayRecord> LeakRays(const Mesh& m, Inside inside, std::size_t count,
   std::vector<RayRecord> rays;
   rays.reserve(count);
   while (rays.size() < count) {
-    glm::dvec3 o = rays.size() % 10 == 0 && inside(glm::dvec3(0.0, 0.0, 0.5)) ? glm::dvec3(0.0, 0.0, 0.5) : InsidePoint(rng, inside);
+    const glm::dvec3 axisPoint(0.0, 0.0, 0.5);
+    glm::dvec3 o = rays.size() % 10 == 0 && inside(axisPoint) ? axisPoint : InsidePoint(rng, inside);
     const double kind = rng.Uniform();
     glm::dvec3 d;
     if (kind < 0.4) {
@@ -226,7 +227,7 @@ void AddLeakCases(std::vector<CaseSpec>& specs)
                    "Icosphere of level 5 (20480 triangles, vertices on a 2^-16 lattice). Rays from inside, 40% "
                    "exactly through vertices, 40% exactly through edge points, 10% through face centroids, 10% "
                    "random. Expect (closest and occlusion): a hit (a miss is a leak) naming a triangle that contains "
-                   "the first crossing within check.h's delta, at a point (closest) within delta of that triangle.",
+                   "the first crossing x* = o + t* d within check.h's delta, and (closest) |t - t*| |d| <= delta.",
                    false, [](AccelKind, const GenOptions& o) {
                      return LeakCase("leaks/icosphere", Icosphere(5), InIcosphere, o.quick ? 20000 : 400000, 101);
                    }});
@@ -238,11 +239,13 @@ void AddLeakCases(std::vector<CaseSpec>& specs)
                      return LeakCase("leaks/split-cube", SplitCube(40), InCube, o.quick ? 20000 : 300000, 102);
                    }});
   specs.push_back({"leaks/fan-cone", "leaks",
-                   "A closed cone of 2048 triangles: 1024 around the apex and 1024 around the base centre (two "
-                   "vertices each shared by 1024 triangles, slivers of aspect ratio ~350); a third of the vertex rays aim at those two, half of "
-                   "them from the axis (axis-parallel, +-0 components). Expect as leaks/icosphere.",
+                   "A closed cone of 4096 triangles (quick: 2048): 2048 around the apex and 2048 around the base "
+                   "centre (two vertices each shared by 2048 triangles; the sides are slivers of aspect ratio ~700); "
+                   "a third of the vertex rays aim at those two, half of them from the axis (axis-parallel, +-0 "
+                   "components). Expect as leaks/icosphere.",
                    false, [](AccelKind, const GenOptions& o) {
-                     return LeakCase("leaks/fan-cone", FanCone(1024), InCone, o.quick ? 20000 : 300000, 103);
+                     return LeakCase("leaks/fan-cone", FanCone(o.quick ? 1024 : 2048), InCone,
+                                     o.quick ? 20000 : 300000, 103);
                    }});
 }
 

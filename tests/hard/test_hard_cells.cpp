@@ -49,7 +49,8 @@ TEST_CASE("hard: cell-boundary rays lie on the built structure's own planes")
       std::size_t flat = 0;
       for (const Triangle& t : c.scene->triangles)
         for (int a = 0; a < 3; ++a)
-          if (t.v0[a] == t.v1[a] && t.v1[a] == t.v2[a] && std::binary_search(planes.axis[a].begin(), planes.axis[a].end(), t.v0[a]))
+          if (t.v0[a] == t.v1[a] && t.v1[a] == t.v2[a] &&
+              std::binary_search(planes.axis[a].begin(), planes.axis[a].end(), t.v0[a]))
             ++flat;
       CHECK(flat >= 12);
     }
