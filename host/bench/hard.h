@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -13,11 +14,15 @@
 
 namespace cr {
 
+struct HardCaseResult;
+
 struct HardOptions {
   std::vector<Backend> backends;      // empty: every backend available here
   std::vector<AccelKind> accels;      // empty: grid, octree, bvh
   std::vector<Precision> precisions;  // empty: fast, robust, fp64
   bool quick = false;                 // reduced ray counts (CI)
+  std::vector<std::string> cases;     // empty: every case; else names or name prefixes ("leaks/")
+  std::function<void(const HardCaseResult&)> onResult;  // progress: called after each combination
 };
 
 struct HardCaseResult {
@@ -28,11 +33,19 @@ struct HardCaseResult {
   std::uint64_t rays = 0;
   std::uint64_t wrong = 0;  // rays whose answer breaks the case's expectation
   std::string note;         // e.g. "skipped: no OpenCL device"
+  bool skipped = false;     // the backend or precision is not available here
+  // Held to 0 wrong: robust and fp64, robust only where the case is within
+  // float32 resolution; fast never (reported, not asserted).
+  bool required = false;
 };
 
 std::vector<HardCaseResult> RunHardSuite(const HardOptions& options);
 
-// Markdown table: one row per case, one column per structure x backend x mode.
+// Markdown table: one row per case, one column per structure x backend x mode,
+// then notes (skips, expected errors, the first wrong rays of failures).
 std::string HardTableMarkdown(const std::vector<HardCaseResult>& results);
+
+// Markdown list of every case: what it generates and what it expects.
+std::string HardCasesMarkdown();
 
 }  // namespace cr

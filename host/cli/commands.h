@@ -35,5 +35,6 @@ Run RegisterTrace(CLI::App& app);
 Run RegisterCheck(CLI::App& app);
 Run RegisterRender(CLI::App& app);
 Run RegisterGen(CLI::App& app);
+Run RegisterHard(CLI::App& app);
 
 }  // namespace cr::cli

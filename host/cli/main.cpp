@@ -1,4 +1,4 @@
-// cellray: one binary, subcommands info, rays, trace, check, render, gen.
+// cellray: one binary, subcommands info, rays, trace, check, render, gen, hard.
 // Errors are caught here, once: bad input exits 2, runtime failures exit 1,
 // each reported as one line `cellray: <what>` on stderr.
 #include <cstdio>
@@ -31,6 +31,7 @@ int main(int argc, char** argv)
     add(cr::cli::RegisterCheck);
     add(cr::cli::RegisterRender);
     add(cr::cli::RegisterGen);
+    add(cr::cli::RegisterHard);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cellray: internal error while setting up the command line: %s\n", e.what());
     return cr::kExitRuntime;

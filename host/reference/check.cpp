@@ -75,6 +75,86 @@ bool PossiblyMeets(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r,
   return false;
 }
 
+// Parameter s in [0, 1] of the point of segment p1 + s (q1 - p1) closest to
+// segment p2 q2 (Ericson, Real-Time Collision Detection 5.1.9).
+double ClosestOnSegment(const glm::dvec3& p1, const glm::dvec3& q1, const glm::dvec3& p2, const glm::dvec3& q2)
+{
+  const glm::dvec3 d1 = q1 - p1, d2 = q2 - p2, rr = p1 - p2;
+  const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, rr);
+  if (a <= 0.0) return 0.0;
+  const double c = glm::dot(d1, rr);
+  if (e <= 0.0) return std::clamp(-c / a, 0.0, 1.0);
+  const double b = glm::dot(d1, d2), denom = a * e - b * b;
+  double s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  const double t = (b * s + f) / e;
+  if (t < 0.0) s = std::clamp(-c / a, 0.0, 1.0);
+  else if (t > 1.0) s = std::clamp((b - c) / a, 0.0, 1.0);
+  return s;
+}
+
+// Does the ray come within delta(t) of primitive `prim` somewhere in
+// [tmin - delta, tmax + delta]? The distance from a segment to a triangle
+// is smallest where the segment crosses it (MeetsPrim), at an end, or at its
+// closest approach to an edge; to a sphere at the closest approach to the
+// centre; cones are sampled at the closest approaches to their axis and end
+// points. This catches what the eight shifted rays of PossiblyMeets miss: a
+// ray through a triangle's vertex where the triangle's angle is narrower
+// than their 45-degree spacing.
+bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
+{
+  const Scene& scene = tr.GetScene();
+  const PrimCounts n = scene.Counts();
+  const double dl = glm::length(r.d);
+  const double scale = tr.PrimScale(prim);
+  auto delta = [&](double t) {
+    return kCheckRelTol * (MaxAbs(r.o) + std::max(t, 0.0) * MaxAbs(r.d)) + kCheckPrimTol * scale;
+  };
+  std::vector<std::uint32_t> pieces;
+  tr.PiecesOf(prim, pieces);
+  for (std::uint32_t g : pieces) {
+    // The piece's points, and a bounding sphere to make the ray a segment.
+    glm::dvec3 pts[3];
+    int nPts = 0;
+    double rad = 0.0;
+    if (g < n.nSpheres) {
+      pts[nPts++] = D3(scene.spheres[g].center);
+      rad = scene.spheres[g].radius;
+    } else if (g < n.nSpheres + n.nTriangles) {
+      const Triangle& t = scene.triangles[g - n.nSpheres];
+      pts[nPts++] = D3(t.v0);
+      pts[nPts++] = D3(t.v1);
+      pts[nPts++] = D3(t.v2);
+    } else {
+      const Cone& c = scene.cones[g - n.nSpheres - n.nTriangles];
+      pts[nPts++] = D3(c.base);
+      pts[nPts++] = D3(c.apex);
+      rad = std::max(c.baseRadius, c.apexRadius);
+    }
+    glm::dvec3 mid(0.0);
+    for (int k = 0; k < nPts; ++k) mid += pts[k] / double(nPts);
+    double reach = rad;
+    for (int k = 0; k < nPts; ++k) reach = std::max(reach, glm::length(pts[k] - mid) + rad);
+    const double tc = glm::dot(mid - r.o, r.d) / (dl * dl);
+    const double slack = (reach + delta(tc + reach / dl) + 1e-300) / dl;
+    const double t0 = std::max({0.0, r.tmin - delta(r.tmin) / dl, tc - slack});
+    const double t1 = std::min(r.tmax + delta(r.tmax) / dl, tc + slack);
+    if (!(t0 <= t1)) continue;
+    const glm::dvec3 a = r.o + t0 * r.d, b = r.o + t1 * r.d;
+    std::vector<double> ts = {t0, t1};
+    if (g < n.nSpheres) {
+      ts.push_back(std::clamp(tc, t0, t1));
+    } else if (g < n.nSpheres + n.nTriangles) {
+      for (int k = 0; k < 3; ++k) ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[k], pts[(k + 1) % 3]));
+    } else {
+      ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[0], pts[1]));
+      for (int k = 0; k < 2; ++k) ts.push_back(std::clamp(glm::dot(pts[k] - r.o, r.d) / (dl * dl), t0, t1));
+    }
+    for (double t : ts)
+      if (tr.DistanceToPrim(prim, r.o + t * r.d) <= delta(t)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRecord& hit, bool occlusion, double* relErr,
@@ -94,7 +174,9 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
       if (MeetsPrim(tr, hit.prim, r, pieces)) return Verdict::Agree;
       // Scale delta by where the primitive is along the ray.
       double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
-      return PossiblyMeets(tr, hit.prim, r, Delta(tr, hit.prim, r, far)) ? Verdict::Tie : Verdict::WrongNotOnPrim;
+      return PossiblyMeets(tr, hit.prim, r, Delta(tr, hit.prim, r, far)) || NearRay(tr, hit.prim, r)
+                 ? Verdict::Tie
+                 : Verdict::WrongNotOnPrim;
     }
     if (!any.Found()) return Verdict::Agree;
     tr.AllHits(r, all);

@@ -18,8 +18,9 @@
 //  - wrong: anything else (a robust nearer surface skipped, a point not on
 //           the primitive it names, a robust hit reported as a miss).
 // Occlusion answers: "occluded by P" is right if P meets the ray in
-// [tmin, tmax] (or a delta-shifted ray does); "free" is right if every
-// surface the ray meets there is marginal.
+// [tmin, tmax] (or a delta-shifted ray does, or P comes within delta of the
+// ray there); "free" is right if every surface the ray meets there is
+// marginal.
 #pragma once
 
 #include <cstdint>

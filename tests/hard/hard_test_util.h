@@ -1,0 +1,60 @@
+// Shared by the hard-case tests: runs cases of the suite (bench/hard.h) on
+// every structure x backend x precision available here and asserts 0 wrong
+// rays for every required combination (robust and fp64; robust only within
+// float32 resolution), reporting fast's counts without asserting them.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <doctest/doctest.h>
+
+#include "bench/hard.h"
+#include "core/error.h"
+
+namespace cr::hard_test {
+
+// OpenCL programs built by the tests persist under the build tree (as in
+// test_opencl.cpp), so that only the first test process pays the compiler.
+inline void UseTestProgramCache()
+{
+  const auto dir = std::filesystem::path(CELLRAY_BINARY).parent_path().parent_path() / "test-cache" / "opencl";
+  ::setenv("CELLRAY_CACHE_DIR", dir.string().c_str(), 1);
+}
+
+// Runs the cases named by `prefix` (quick size) and checks the results.
+inline std::vector<HardCaseResult> RunAndCheck(const std::string& prefix)
+{
+  UseTestProgramCache();
+  HardOptions o;
+  o.quick = true;
+  o.cases = {prefix};
+  SetWarningsQuiet(true);
+  std::vector<HardCaseResult> results = RunHardSuite(o);
+  SetWarningsQuiet(false);
+  REQUIRE(!results.empty());
+  std::set<std::string> skips;
+  for (const HardCaseResult& r : results) {
+    const std::string combo = std::string(AccelKindName(r.accel)) + " " + BackendName(r.backend) + " " +
+                              PrecisionName(r.precision);
+    if (r.skipped) {
+      skips.insert(std::string(BackendName(r.backend)) + " " + PrecisionName(r.precision) + ": " + r.note);
+      continue;
+    }
+    if (r.required) {
+      INFO(r.caseName, " ", combo, ": ", r.wrong, " wrong of ", r.rays, "; ", r.note);
+      CHECK(r.wrong == 0);
+    } else if (r.wrong > 0) {
+      MESSAGE("reported, not asserted: ", r.caseName, " ", combo, ": ", r.wrong, " wrong of ", r.rays);
+    }
+  }
+  // A combination that cannot run here is said loudly, never passed silently.
+  for (const std::string& s : skips) std::fprintf(stderr, "cellray_tests: *** hard cases SKIPPED for %s ***\n", s.c_str());
+  return results;
+}
+
+}  // namespace cr::hard_test

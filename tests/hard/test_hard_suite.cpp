@@ -1,0 +1,69 @@
+// The hard-case suite itself: its expectations hold for the fp64 reference,
+// it does see the fast mode fail, and its report lists every case.
+#include <string>
+
+#include "bench/hard_cases.h"
+#include "hard_test_util.h"
+
+using namespace cr;
+
+TEST_CASE("hard: every case's expectation holds for the fp64 reference tracer")
+{
+  HardOptions o;
+  o.quick = true;
+  o.backends = {Backend::Reference};
+  o.precisions = {Precision::Fp64};
+  SetWarningsQuiet(true);
+  const auto results = RunHardSuite(o);
+  SetWarningsQuiet(false);
+  std::size_t judged = 0;
+  for (const auto& r : results) {
+    INFO(r.caseName, " ", std::string(AccelKindName(r.accel)), ": ", r.wrong, " wrong of ", r.rays, " ", r.note);
+    CHECK(!r.skipped);
+    CHECK(r.wrong == 0);
+    judged += r.rays;
+  }
+  CHECK(judged > 100000);
+}
+
+TEST_CASE("hard: the suite sees the fast mode fail (textbook quadratic, Moller-Trumbore at edges)")
+{
+  HardOptions o;
+  o.quick = true;
+  o.backends = {Backend::Scalar};
+  o.precisions = {Precision::Fast};
+  o.accels = {AccelKind::Grid};
+  o.cases = {"tiny-far/at-origin", "leaks/icosphere"};
+  const auto results = RunHardSuite(o);
+  REQUIRE(results.size() == 2);
+  for (const auto& r : results) {
+    INFO(r.caseName, ": ", r.wrong, " wrong of ", r.rays);
+    CHECK(!r.required);
+    CHECK(r.wrong > r.rays / 100);
+  }
+}
+
+TEST_CASE("hard: the report has a row per case and a column per structure x backend x precision")
+{
+  std::vector<HardCaseResult> results;
+  for (const char* name : {"a/one", "b/two"})
+    for (AccelKind a : {AccelKind::Grid, AccelKind::BVH})
+      for (Precision p : {Precision::Fast, Precision::Robust}) {
+        HardCaseResult r;
+        r.caseName = name;
+        r.accel = a;
+        r.backend = Backend::Scalar;
+        r.precision = p;
+        r.rays = 10;
+        r.wrong = p == Precision::Fast ? 3 : 0;
+        r.required = p == Precision::Robust;
+        results.push_back(r);
+      }
+  results[1].wrong = 2;  // a/one grid robust fails
+  const std::string md = HardTableMarkdown(results);
+  CHECK(md.find("| case | rays | grid scalar fast | grid scalar robust | bvh scalar fast | bvh scalar robust |") == 0);
+  CHECK(md.find("| a/one | 10 | 3 | **2** | 3 | 0 |") != std::string::npos);
+  CHECK(md.find("| b/two | 10 | 3 | 0 | 3 | 0 |") != std::string::npos);
+  const std::string cases = HardCasesMarkdown();
+  for (const hard::CaseSpec& s : hard::CaseSpecs()) CHECK(cases.find("**" + s.name + "**") != std::string::npos);
+}
