@@ -142,13 +142,16 @@ CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_
         }
         ok = Triangle_MollerTrumboreN<N>(v0, v1, v2, P.org, P.dir, P.tmin, H.t, t, u, v);
       } else {
-        vfloat<N> A[3], B[3], C[3];
+        vfloat<N> A[3], B[3], C[3], w0[3], w1[3], w2[3];
         for (int j = 0; j < 3; ++j) {
           A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
           B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
           C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
+          w0[j] = vfloat<N>(tri.v0[j]);
+          w1[j] = vfloat<N>(tri.v1[j]);
+          w2[j] = vfloat<N>(tri.v2[j]);
         }
-        ok = Triangle_WatertightN<N>(A, B, C, P.s, P.tmin, H.t, t, u, v);
+        ok = Triangle_WatertightN<N>(A, B, C, P.s, w0, w1, w2, P.org, P.dir, P.tmin, H.t, t, u, v);
       }
       break;
     }

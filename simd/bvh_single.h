@@ -108,13 +108,16 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
         }
         ok = Triangle_MollerTrumboreN<K>(v0, v1, v2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
       } else {
-        vfloat<K> A[3], B[3], C[3];
+        vfloat<K> A[3], B[3], C[3], w0[3], w1[3], w2[3];
         for (int j = 0; j < 3; ++j) {
           A[j] = vfloat<K>::Load(pk.v[0][pr.k[j]]) - pr.orgK[j];
           B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
           C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
+          w0[j] = vfloat<K>::Load(pk.v[0][j]);
+          w1[j] = vfloat<K>::Load(pk.v[1][j]);
+          w2[j] = vfloat<K>::Load(pk.v[2][j]);
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, pr.tmin, vfloat<K>(hit.t), t, u, v);
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, w0, w1, w2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
       }
       if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
         changed = true;

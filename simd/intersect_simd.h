@@ -91,14 +91,17 @@ CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], cons
   return Box_Finish<kFast, N>(n, f, tmin, tmax, tEnter);
 }
 
-// Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller first.
+// Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller
+// first; the Vieta root c/q gives way to the direct root (sq - bh)/a when q is
+// so small that c's own rounding (about eps * cScale) dominates.
 template <int N>
-CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> disc, vfloat<N>& t0,
-                                     vfloat<N>& t1)
+CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> cScale, vfloat<N> disc,
+                                     vfloat<N>& t0, vfloat<N>& t1)
 {
-  const vfloat<N> q = -(bh + CopySign(Sqrt(disc), bh));
+  const vfloat<N> sq = CopySign(Sqrt(disc), bh);
+  const vfloat<N> q = -(bh + sq);
   const vfloat<N> r0 = q / a;
-  const vfloat<N> r1 = Select(q != vfloat<N>(0.0f), c / q, r0);
+  const vfloat<N> r1 = Select(vfloat<N>(16.0f) * q * q >= a * cScale, c / q, (sq - bh) / a);
   t0 = FMin(r0, r1);
   t1 = FMax(r0, r1);
 }
@@ -110,7 +113,8 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
 {
   const vfloat<N> a = Dot3N<N>(dir, dir);
   const vfloat<N> bh = Dot3N<N>(f, dir);
-  const vfloat<N> c = Dot3N<N>(f, f) - rad * rad;
+  const vfloat<N> ff = Dot3N<N>(f, f);
+  const vfloat<N> c = ff - rad * rad;
   vfloat<N> t0, t1;
   vbool<N> miss;
   if constexpr (kFast) {
@@ -126,7 +130,7 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
     const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
     const vfloat<N> disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
     miss = disc < vfloat<N>(0.0f);
-    Quadratic_RootsN<N>(a, bh, c, disc, t0, t1);
+    Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1);
   }
   const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
   const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
@@ -134,13 +138,51 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
   return AndNot(in0 | in1, miss);
 }
 
+// The distance along the ray to the triangle's plane, kernels/intersect.h's
+// Triangle_Intersect step for step: the normal from the shortest edge and its
+// successor (edges from the stored vertices), the shared vertex relative to
+// the origin; a plane-parallel ray (n.d == 0) sets `miss`. v0..v2, org, dir
+// in world axis order.
+template <int N>
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
+                                          const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss)
+{
+  vfloat<N> e0[3], e1[3], e2[3];
+  for (int i = 0; i < 3; ++i) {
+    e0[i] = v1[i] - v0[i];
+    e1[i] = v2[i] - v1[i];
+    e2[i] = v0[i] - v2[i];
+  }
+  const vfloat<N> l0 = Dot3N<N>(e0, e0), l1 = Dot3N<N>(e1, e1), l2 = Dot3N<N>(e2, e2);
+  // k = (l0 <= l1) ? ((l0 <= l2) ? 0 : 2) : ((l1 <= l2) ? 1 : 2)
+  const vbool<N> k0 = (l0 <= l1) & (l0 <= l2);
+  const vbool<N> k1 = AndNot(l1 <= l2, l0 <= l1);
+  // k == 2 otherwise. Edge k, its successor, and the vertex they share:
+  // k 0: e0, e1, v1; k 1: e1, e2, v2; k 2: e2, e0, v0.
+  vfloat<N> ea[3], eb[3], p[3];
+  for (int i = 0; i < 3; ++i) {
+    ea[i] = Select(k0, e0[i], Select(k1, e1[i], e2[i]));
+    eb[i] = Select(k0, e1[i], Select(k1, e2[i], e0[i]));
+    p[i] = Select(k0, v1[i] - org[i], Select(k1, v2[i] - org[i], v0[i] - org[i]));
+  }
+  vfloat<N> n[3];
+  n[0] = ea[1] * eb[2] - ea[2] * eb[1];
+  n[1] = ea[2] * eb[0] - ea[0] * eb[2];
+  n[2] = ea[0] * eb[1] - ea[1] * eb[0];
+  const vfloat<N> nd = Dot3N<N>(n, dir);
+  miss = miss | (nd == vfloat<N>(0.0f));
+  return Dot3N<N>(n, p) / nd;
+}
+
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
 template <int N>
 CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
-                                             const vfloat<N> s[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
-                                             vfloat<N>& uHit, vfloat<N>& vHit)
+                                             const vfloat<N> s[3], const vfloat<N> v0[3], const vfloat<N> v1[3],
+                                             const vfloat<N> v2[3], const vfloat<N> org[3], const vfloat<N> dir[3],
+                                             vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit,
+                                             vfloat<N>& vHit)
 {
   const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
   const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
@@ -152,10 +194,10 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
   const vfloat<N> det = U + V + W;
   miss = miss | (det == zero);
-  const vfloat<N> Az = s[2] * A[2], Bz = s[2] * B[2], Cz = s[2] * C[2];
-  const vfloat<N> T = U * Az + V * Bz + W * Cz;
+  // t from the triangle's plane, as kernels/intersect.h computes it (in world
+  // axis order, which the sums' rounding depends on).
+  const vfloat<N> t = Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
-  const vfloat<N> t = T * invDet;
   tHit = t;
   uHit = V * invDet;
   vHit = W * invDet;
@@ -217,7 +259,8 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
   const vfloat<N> rb = r0 + k * os;
   const vfloat<N> A = Dot3N<N>(dR, dR) - k * k * ds * ds;
   const vfloat<N> Bh = Dot3N<N>(oR, dR) - k * ds * rb;
-  const vfloat<N> C = Dot3N<N>(oR, oR) - rb * rb;
+  const vfloat<N> oo = Dot3N<N>(oR, oR);
+  const vfloat<N> C = oo - rb * rb;
   // A == 0: the linear case.
   const vbool<N> linear = A == zero;
   const vfloat<N> tLin = -C / (vfloat<N>(2.0f) * Bh);
@@ -239,7 +282,7 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
     const vfloat<N> disc = Dot3N<N>(e, e) - Dot3N<N>(x, x);
     quadMiss = disc < zero;
-    Quadratic_RootsN<N>(A, Bh, C, disc, t0, t1);
+    Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1);
   }
   t0 = Select(linear, tLin, t0);
   t1 = Select(linear, tLin, t1);
