@@ -34,10 +34,6 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
 {
   ClProgramSpec s;
   ParseClVariant(config.variant, s.variant, s.generic);
-  if (s.variant == ClVariant::Packet && config.accel != AccelKind::BVH)
-    throw InputError(fmt::format("--variant packet: the opencl backend has packet traversal for bvh only so far "
-                                 "(--accel {} runs --variant ray)",
-                                 AccelKindName(config.accel)));
   if (config.precision == Precision::Fp64 && !dev.fp64)
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
