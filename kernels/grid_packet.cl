@@ -38,7 +38,7 @@ CR_FUNC void GridPacket_StoreLane(CR_GLOBAL const GridHeader* grid, CR_GLOBAL co
   const uint idx = active ? Grid_CellIndex(grid, cell) : 0u;
   const uint begin = cellStart[idx];
   const uint end = cellStart[idx + 1u];
-  CR_UNROLL for (int a = 0; a < 3; ++a) sCell[a * (int)nLanes + (int)lid] = cell[a];
+  CR_UNROLL for (uint a = 0; a < 3u; ++a) sCell[a * nLanes + lid] = cell[a];
   sRange[lid] = begin;
   sRange[nLanes + lid] = active ? end - begin : 0u;
   sLane[lid] = (uint)active;
@@ -107,7 +107,7 @@ CR_FUNC void GridPacket_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const 
       Ray ray;
       Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
       int cell[3];
-      CR_UNROLL for (int a = 0; a < 3; ++a) cell[a] = sCell[a * (int)nLanes + (int)lid];
+      CR_UNROLL for (uint a = 0; a < 3u; ++a) cell[a] = sCell[a * nLanes + lid];
       const int active = (int)sLane[lid] && Grid_Next(grid, &ray, sHit[lid], cell);
       GridPacket_StoreLane(grid, cellStart, sCell, sRange, sLane, lid, nLanes, cell, active, st);
     }

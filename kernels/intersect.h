@@ -132,9 +132,9 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
     B[i] = (real)tri->v1[i] - r->org[i];
     C[i] = (real)tri->v2[i] - r->org[i];
   }
-  const real Ax = A[kx] - r->sx * A[kz], Ay = A[ky] - r->sy * A[kz];
-  const real Bx = B[kx] - r->sx * B[kz], By = B[ky] - r->sy * B[kz];
-  const real Cx = C[kx] - r->sx * C[kz], Cy = C[ky] - r->sy * C[kz];
+  const real Ax = CR_PICK3(A, kx) - r->sx * CR_PICK3(A, kz), Ay = CR_PICK3(A, ky) - r->sy * CR_PICK3(A, kz);
+  const real Bx = CR_PICK3(B, kx) - r->sx * CR_PICK3(B, kz), By = CR_PICK3(B, ky) - r->sy * CR_PICK3(B, kz);
+  const real Cx = CR_PICK3(C, kx) - r->sx * CR_PICK3(C, kz), Cy = CR_PICK3(C, ky) - r->sy * CR_PICK3(C, kz);
   const real U = Cx * By - Cy * Bx;
   const real V = Ax * Cy - Ay * Cx;
   const real W = Bx * Ay - By * Ax;
@@ -142,7 +142,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
     return 0;
   const real det = U + V + W;
   if (det == (real)0.0f) return 0;
-  const real Az = r->sz * A[kz], Bz = r->sz * B[kz], Cz = r->sz * C[kz];
+  const real Az = r->sz * CR_PICK3(A, kz), Bz = r->sz * CR_PICK3(B, kz), Cz = r->sz * CR_PICK3(C, kz);
   const real T = U * Az + V * Bz + W * Cz;
   const real invDet = (real)1.0f / det;
   const real t = T * invDet;

@@ -6,20 +6,29 @@
  * can be vectorised; a loop whose trip count differs per work-item cannot.
  *
  * The packet's rays and hits live in local memory, one array per field
- * (structure of arrays, CR_PACKET_RAY_FIELDS reals and one uint per lane for
- * the ray, CR_PACKET_HIT_FIELDS reals and one uint for the hit). Each step
- * loads what it needs into private variables and stores back what it
- * changed: no ray or hit value is live across a barrier, so PoCL keeps no
- * per-lane copy of them ("context arrays"), and the per-lane loads of one
- * field are consecutive across the work-items, which its loop vectoriser
- * turns into vector loads. (Kept in private structs across barriers, the
- * fields came out pre-packed in 2-wide vectors, which the vectoriser
- * refuses: "instruction return type cannot be vectorized".) */
+ * (structure of arrays: CR_PACKET_RAY_FIELDS reals and CR_PACKET_AXES_FIELDS
+ * uints per lane for the ray, CR_PACKET_HIT_FIELDS reals and one uint for the
+ * hit). Each step loads what it needs into private variables and stores back
+ * what it changed: no ray or hit value is live across a barrier, so PoCL
+ * keeps no per-lane copy of them ("context arrays"), and the per-lane loads
+ * of one field are consecutive across the work-items, which its loop
+ * vectoriser turns into vector loads.
+ *
+ * PoCL's loop vectoriser refuses a work-item loop that holds any value of
+ * vector type ("instruction return type cannot be vectorized"), and the
+ * compiler makes such values out of alike scalar operations on neighbouring
+ * fields before the work-item loops exist: private structs kept across
+ * barriers, struct copies, arrays indexed by a computed axis, and the three
+ * axes of the triangle test unpacked from one word by three alike
+ * shift-and-masks all came out as 2-wide vectors. Hence the structure of
+ * arrays, primitives copied field by field, CR_PICK3 (prelude.h), and one
+ * word per axis. */
 #ifndef CELLRAY_KERNELS_PACKET_CL
 #define CELLRAY_KERNELS_PACKET_CL
 #include "intersect.h"
 
 #define CR_PACKET_RAY_FIELDS 14
+#define CR_PACKET_AXES_FIELDS 3
 #define CR_PACKET_HIT_FIELDS 3
 
 CR_FUNC void Packet_StoreRay(__local real* sRay, __local uint* sAxes, uint lid, uint nLanes, const Ray* r)
@@ -34,7 +43,9 @@ CR_FUNC void Packet_StoreRay(__local real* sRay, __local uint* sAxes, uint lid, 
   sRay[11 * nLanes + lid] = r->sx;
   sRay[12 * nLanes + lid] = r->sy;
   sRay[13 * nLanes + lid] = r->sz;
-  sAxes[lid] = (uint)r->kx | ((uint)r->ky << 2) | ((uint)r->kz << 4);
+  sAxes[lid] = (uint)r->kx;
+  sAxes[nLanes + lid] = (uint)r->ky;
+  sAxes[2 * nLanes + lid] = (uint)r->kz;
 }
 
 CR_FUNC void Packet_LoadRay(__local const real* sRay, __local const uint* sAxes, uint lid, uint nLanes, Ray* r)
@@ -49,10 +60,9 @@ CR_FUNC void Packet_LoadRay(__local const real* sRay, __local const uint* sAxes,
   r->sx = sRay[11 * nLanes + lid];
   r->sy = sRay[12 * nLanes + lid];
   r->sz = sRay[13 * nLanes + lid];
-  const uint k = sAxes[lid];
-  r->kx = (int)(k & 3u);
-  r->ky = (int)((k >> 2) & 3u);
-  r->kz = (int)((k >> 4) & 3u);
+  r->kx = (int)sAxes[lid];
+  r->ky = (int)sAxes[nLanes + lid];
+  r->kz = (int)sAxes[2 * nLanes + lid];
 }
 
 CR_FUNC void Packet_StoreHit(__local real* sHit, __local uint* sHitG, uint lid, uint nLanes, const Hit* h)
@@ -84,6 +94,43 @@ CR_FUNC int Packet_Commit(Hit* hit, int want, real t, real u, real v, uint g)
   return take;
 }
 
+/* Private copies of a primitive, field by field: a struct copy becomes a
+ * memcpy, or a load of the whole struct as one vector, either of which
+ * keeps the work-item loop vectoriser from widening the step. */
+CR_FUNC Sphere Packet_LoadSphere(CR_GLOBAL const Sphere* p)
+{
+  Sphere s;
+  CR_UNROLL for (int a = 0; a < 3; ++a) s.center[a] = p->center[a];
+  s.radius = p->radius;
+  return s;
+}
+
+CR_FUNC Triangle Packet_LoadTriangle(CR_GLOBAL const Triangle* p)
+{
+  Triangle t;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    t.v0[a] = p->v0[a];
+    t.v1[a] = p->v1[a];
+    t.v2[a] = p->v2[a];
+  }
+  t.flags = 0u; /* not read by the test */
+  t.pad1 = 0u;
+  t.pad2 = 0u;
+  return t;
+}
+
+CR_FUNC Cone Packet_LoadCone(CR_GLOBAL const Cone* p)
+{
+  Cone c;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    c.base[a] = p->base[a];
+    c.apex[a] = p->apex[a];
+  }
+  c.baseRadius = p->baseRadius;
+  c.apexRadius = p->apexRadius;
+  return c;
+}
+
 /* Tests primitive g (a valid index) against the lane's ray and hit, as
  * Prim_Intersect does, without keeping the result: 1 with t, u, v when the
  * ray meets it within [tmin, hit.t]. One branch per primitive type, each
@@ -97,19 +144,19 @@ CR_FUNC int Packet_PrimTest(const PrimView* pv, uint g, const Ray* ray, const Hi
   *v = (real)0.0f;
 #if CR_HAS_SPHERES
   if (g < pv->nSpheres) {
-    const Sphere prim = pv->spheres[g];
+    const Sphere prim = Packet_LoadSphere(pv->spheres + g);
     found = Sphere_Intersect(ray, &prim, ray->tmin, hit->t, t);
   }
 #endif
 #if CR_HAS_TRIANGLES
   if (g >= pv->nSpheres && g < pv->nSpheres + pv->nTriangles) {
-    const Triangle prim = pv->triangles[g - pv->nSpheres];
+    const Triangle prim = Packet_LoadTriangle(pv->triangles + (g - pv->nSpheres));
     found = Triangle_Intersect(ray, &prim, ray->tmin, hit->t, t, u, v);
   }
 #endif
 #if CR_HAS_CONES
   if (g >= pv->nSpheres + pv->nTriangles) {
-    const Cone prim = pv->cones[g - pv->nSpheres - pv->nTriangles];
+    const Cone prim = Packet_LoadCone(pv->cones + (g - pv->nSpheres - pv->nTriangles));
     found = Cone_Intersect(ray, &prim, ray->tmin, hit->t, t);
   }
 #endif

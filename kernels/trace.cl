@@ -248,7 +248,7 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   __local uint sLane[CR_PACKET_SIZE];                       \
   __local uint sState[CR_PACKET_STATE_WORDS];               \
   __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE]; \
-  __local uint sAxes[CR_PACKET_SIZE];                       \
+  __local uint sAxes[CR_PACKET_AXES_FIELDS * CR_PACKET_SIZE];\
   __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE]; \
   __local uint sHitG[CR_PACKET_SIZE]
 #define CR_PACKET_PARAMS_COMMON                                                                                \
