@@ -66,16 +66,20 @@ CR_FUNC void GridPacket_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const 
                               __local uint* sRange, __local real* sRay, __local uint* sAxes, __local real* sHit,
                               __local uint* sHitG)
 {
+  if (lid == 0) {
+    sState[0] = 0u;
+    sState[1] = 0u;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
   {
     Ray ray;
     Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
     int cell[3] = {0, 0, 0};
     const int active = live && grid->nRefs != 0u && Grid_Enter(grid, &ray, sHit[lid], cell);
     GridPacket_Enter(grid, cellStart, &ray, sHit[lid], sCell, sRange, sLane, lid, nLanes, cell, active, st);
-    if (lid == 0) {
-      sState[0] = 1u;
-      sState[1] = 0u;
-    }
+    /* So that no iteration runs (and no reference is read) when no lane
+     * has a reference to test: the grid may have none. */
+    if (active) atomic_or(sState, 1u);
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   /* Iteration i runs when flag i & 1 is set; its second step sets flag

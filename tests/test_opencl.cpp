@@ -414,6 +414,37 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
   }
 }
 
+TEST_CASE("opencl: a scene without primitives misses everywhere, every structure and variant" *
+          doctest::skip(NoOpenCL()))
+{
+  // The generic programs model every primitive type: a packet must not read
+  // a primitive (or a reference) that the scene does not have.
+  auto cache = TestCacheDir();
+  const Scene scene;
+  std::vector<RayRecord> rays(40);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const float x = float(i) / float(rays.size());
+    rays[i] = RayRecord{{x, 0.5f, -1.0f}, 0.0f, {0.1f * x, 0.0f, 1.0f}, CR_INF};
+  }
+  for (AccelKind accel : {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree})
+    for (const char* variant : {"ray", "packet", "packet-generic"}) {
+      TraceConfig cfg;
+      cfg.backend = Backend::OpenCL;
+      cfg.accel = accel;
+      cfg.variant = variant;
+      auto tracer = CreateTracer(scene, cfg);
+      for (bool occlusion : {false, true}) {
+        std::vector<HitRecord> hits;
+        tracer->Trace(rays, hits, occlusion, nullptr);
+        INFO(std::string(AccelKindName(accel)), " ", variant, occlusion ? " occlusion" : " closest");
+        REQUIRE(hits.size() == rays.size());
+        std::size_t nHit = 0;
+        for (const auto& h : hits) nHit += h.prim != CR_NO_HIT;
+        CHECK(nHit == 0);
+      }
+    }
+}
+
 TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * doctest::skip(NoOpenCL()))
 {
   const fs::path dir = BuildDir() / "test-cache" / fmt::format("corrupt-{}", ::getpid());
