@@ -39,9 +39,20 @@
 #define CR_OCTREE_PACKET_STATE 10
 #define CR_OCTREE_PACKET_END 0xFFFFFFFFu
 
-/* Lane 0: pops the top entry into sState[0..4] and publishes its childMask,
- * or publishes the end. */
-CR_FUNC void OctreePacket_Pop(CR_GLOBAL const OctreeNode* nodes, __local uint* sStack, __local uint* sState, uint sp)
+/* The node's planes as lane 0 publishes them (sPlane): low, high and mid
+ * plane of each axis, CR_OCTREE_PACKET_PLANE_STRIDE floats apart. Computed
+ * once per node rather than per lane, and kept apart in local memory: read
+ * from neighbouring words, the lanes' three alike per-axis computations
+ * were packed into 2-wide vectors by the compiler, which kept PoCL from
+ * vectorising the step across the lanes. */
+#define CR_OCTREE_PACKET_PLANE_STRIDE 4
+#define CR_OCTREE_PACKET_PLANES (9 * CR_OCTREE_PACKET_PLANE_STRIDE)
+#define CR_OCTREE_PACKET_PLANE(a, k) (((a) * 3 + (k)) * CR_OCTREE_PACKET_PLANE_STRIDE)
+
+/* Lane 0: pops the top entry into sState[0..4] and publishes its childMask
+ * and planes, or publishes the end. */
+CR_FUNC void OctreePacket_Pop(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
+                              __local uint* sStack, __local uint* sState, __local float* sPlane, uint sp)
 {
   if (sp == 0u) {
     sState[0] = CR_OCTREE_PACKET_END;
@@ -53,41 +64,61 @@ CR_FUNC void OctreePacket_Pop(CR_GLOBAL const OctreeNode* nodes, __local uint* s
     sState[w] = sStack[sp * CR_OCTREE_PACKET_ENTRY + (uint)w];
   sState[5] = sp;
   sState[6] = nodes[sState[0]].childMask;
+  const uint level = sState[1];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const uint c = sState[2 + a];
+    sPlane[CR_OCTREE_PACKET_PLANE(a, 0)] = Octree_Plane(hdr, a, level, c);
+    sPlane[CR_OCTREE_PACKET_PLANE(a, 1)] = Octree_Plane(hdr, a, level, c + 1u);
+    sPlane[CR_OCTREE_PACKET_PLANE(a, 2)] = Octree_Plane(hdr, a, level + 1u, 2u * c + 1u);
+  }
 }
 
 /* Closest or any hit of each lane's ray, already stored in sRay, sAxes, sHit,
  * sHitG (packet.cl); `live` is 0 for a lane without a ray. Local memory:
  * sStack CR_OCTREE_PACKET_STACK entries of CR_OCTREE_PACKET_ENTRY words,
- * sLane one word per lane (its votes), sState CR_OCTREE_PACKET_STATE words.
+ * sPlane CR_OCTREE_PACKET_PLANES floats, sLane one word per lane (its votes), sState CR_OCTREE_PACKET_STATE words.
  * Every work-item of the group must call it (it contains barriers). */
 CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
                                 CR_GLOBAL const uint* refs, const PrimView* pv, int anyHit, TraceStats* st, int live,
-                                uint lid, uint nLanes, __local uint* sStack, __local uint* sLane,
+                                uint lid, uint nLanes, __local uint* sStack, __local float* sPlane,
+                                __local uint* sLane,
                                 __local uint* sState, __local real* sRay, __local uint* sAxes, __local real* sHit,
                                 __local uint* sHitG)
 {
   if (lid == 0) {
     CR_UNROLL for (int w = 0; w < CR_OCTREE_PACKET_ENTRY; ++w) sStack[w] = 0u; /* the root */
-    OctreePacket_Pop(nodes, sStack, sState, 1u);
+    OctreePacket_Pop(hdr, nodes, sStack, sState, sPlane, 1u);
   }
   barrier(CLK_LOCAL_MEM_FENCE);
+  /* The node's words are read from sState where they are used, and the
+   * loop's exit test has a region of its own: PoCL takes a value loaded
+   * alike by every work-item (the node, the exit test) for uniform and uses
+   * the last work-item's copy after the work-item loop, and its loop
+   * vectoriser refuses a loop whose value is used outside ("value that
+   * could not be identified as reduction is used outside the loop"). */
   for (;;) {
-    const uint ni = sState[0];
-    if (ni == CR_OCTREE_PACKET_END) break;
+    if (sState[0] == CR_OCTREE_PACKET_END) break;
+    barrier(CLK_LOCAL_MEM_FENCE);
     /* Step 1, every lane: its interval of the node's cell and of the
      * children, from the node's planes. */
-    const uint childMask = sState[6];
     int in;
     {
+      const uint childMask = sState[6];
       Ray ray;
       Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
       const real hitT = sHit[lid];
       const uint signMask = (ray.inv[0] < (real)0.0f ? 1u : 0u) | (ray.inv[1] < (real)0.0f ? 2u : 0u) |
                             (ray.inv[2] < (real)0.0f ? 4u : 0u);
-      uint c[3];
-      CR_UNROLL for (int a = 0; a < 3; ++a) c[a] = sState[2 + a];
+      /* Octree_CellT's parameters, from the published planes. */
       real t0[3], tm[3], t1[3];
-      Octree_CellT(hdr, &ray, signMask, sState[1], c, t0, tm, t1);
+      CR_UNROLL for (int a = 0; a < 3; ++a) {
+        const real lo = Ray_PlaneT(&ray, a, (real)sPlane[CR_OCTREE_PACKET_PLANE(a, 0)]);
+        const real hi = Ray_PlaneT(&ray, a, (real)sPlane[CR_OCTREE_PACKET_PLANE(a, 1)]);
+        tm[a] = Ray_PlaneT(&ray, a, (real)sPlane[CR_OCTREE_PACKET_PLANE(a, 2)]);
+        const int neg = (int)((signMask >> a) & 1u);
+        t0[a] = neg ? hi : lo;
+        t1[a] = neg ? lo : hi;
+      }
       const real ce = fmax(fmax(t0[0], t0[1]), t0[2]);
       const real cx = fmin(fmin(t1[0], t1[1]), t1[2]);
       in = live & (fmax(ce, ray.tmin) <= fmin(cx, hitT) ? 1 : 0);
@@ -100,11 +131,11 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
       }
       enter = in ? enter & childMask : 0u;
       sLane[lid] = enter | ((uint)in << 8) | (signMask << 9) | ((uint)live << 12);
-    }
 #ifdef CR_STATS
-    st->nTS += (uint)in;
-    st->nLeaves += (uint)in & (childMask == 0u ? 1u : 0u);
+      st->nTS += (uint)in;
+      st->nLeaves += (uint)in & (childMask == 0u ? 1u : 0u);
 #endif
+    }
     barrier(CLK_LOCAL_MEM_FENCE);
     /* Step 2, lane 0: push the children some lane entered, pop the next
      * node, publish the leaf's references if some lane entered it. */
@@ -121,7 +152,8 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
       }
       const uint order = (2u * neg[0] > nVoters ? 1u : 0u) | (2u * neg[1] > nVoters ? 2u : 0u) |
                          (2u * neg[2] > nVoters ? 4u : 0u);
-      CR_GLOBAL const OctreeNode* n = nodes + ni;
+      CR_GLOBAL const OctreeNode* n = nodes + sState[0];
+      const uint childMask = sState[6];
       uint sp = sState[5];
       const uint level = sState[1];
       uint c[3];
@@ -139,7 +171,7 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
       sState[7] = n->first;
       sState[8] = (childMask == 0u && nIn > 0u) ? n->count : 0u;
       /* No live lane left (any-hit queries all answered): the end. */
-      OctreePacket_Pop(nodes, sStack, sState, nLive > 0u ? sp : 0u);
+      OctreePacket_Pop(hdr, nodes, sStack, sState, sPlane, nLive > 0u ? sp : 0u);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     /* Step 3, once per reference of the leaf (one barrier each). */

@@ -278,10 +278,11 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 #define CR_PACKET_ARGS_GRID
 #endif
 #ifdef CR_WITH_OCTREE
-#define CR_PACKET_LOCALS_OCTREE \
-  __local uint sOctStack[CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY];
-#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack
-#define CR_PACKET_ARGS_OCTREE , sOctStack
+#define CR_PACKET_LOCALS_OCTREE                                          \
+  __local uint sOctStack[CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY]; \
+  __local float sOctPlane[CR_OCTREE_PACKET_PLANES];
+#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack, __local float *sOctPlane
+#define CR_PACKET_ARGS_OCTREE , sOctStack, sOctPlane
 #else
 #define CR_PACKET_LOCALS_OCTREE
 #define CR_PACKET_PARAMS_OCTREE
@@ -313,7 +314,7 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, 
   GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState, sGridCell,
                    sGridRange, sRay, sAxes, sHit, sHitG);
 #elif defined(CR_ACCEL_OCTREE)
-  OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sLane, sState,
+  OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane, sState,
                      sRay, sAxes, sHit, sHitG);
 #else
   if (accel == CR_ACCEL_ARG_BVH)
@@ -323,7 +324,7 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, 
     GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState,
                      sGridCell, sGridRange, sRay, sAxes, sHit, sHitG);
   else
-    OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sLane,
+    OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane,
                        sState, sRay, sAxes, sHit, sHitG);
 #endif
   Packet_LoadHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
