@@ -68,9 +68,9 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     s.cones = !scene.cones.empty();
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
-  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats, and the fastest of
-  // 8x8, 4x4 and 4x2 for every structure there (docs/OPENCL.md); elsewhere
-  // 8x8, an AMD wavefront or two NVIDIA warps. Smaller where the device
+  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats, and faster there
+  // than 8x8 for every structure (docs/OPENCL.md); elsewhere 8x8, an AMD
+  // wavefront or two NVIDIA warps, not measured. Smaller where the device
   // limits work-groups.
   if (tileW > 0) {
     if (std::size_t(tileW) * std::size_t(tileH) > dev.maxWorkGroupSize)
