@@ -68,10 +68,11 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     s.cones = !scene.cones.empty();
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
-  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats, and faster there
-  // than 8x8 for every structure (docs/OPENCL.md); elsewhere 8x8, an AMD
-  // wavefront or two NVIDIA warps, not measured. Smaller where the device
-  // limits work-groups.
+  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was
+  // 10-35% slower for the octree and the BVH and the same for the grid, 4x2
+  // within noise of 4x4 (docs/OPENCL.md). Elsewhere 8x8, an AMD wavefront or
+  // two NVIDIA warps, not measured. Smaller where the device limits
+  // work-groups.
   if (tileW > 0) {
     if (std::size_t(tileW) * std::size_t(tileH) > dev.maxWorkGroupSize)
       throw InputError(fmt::format("--variant {}: a {}x{} work-group exceeds the {} work-items of '{}'",
