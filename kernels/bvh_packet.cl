@@ -20,6 +20,7 @@
 #ifndef CELLRAY_KERNELS_BVH_PACKET_CL
 #define CELLRAY_KERNELS_BVH_PACKET_CL
 #include "bvh.h"
+#include "packet.cl"
 
 #define CR_PACKET_END 0xFFFFFFFFu
 
@@ -84,84 +85,9 @@ CR_FUNC int BVHPacket_Box(__local const float* box, const Ray* r, real tmin, rea
   return tn <= tf;
 }
 
-/* The packet's rays and hits live in local memory, one array per field
- * (structure of arrays, CR_PACKET_RAY_FIELDS reals and one uint per lane for
- * the ray, CR_PACKET_HIT_FIELDS reals and one uint for the hit). Each step
- * loads what it needs into private variables and stores back what it
- * changed: no ray or hit value is live across a barrier, so PoCL keeps no
- * per-lane copy of them ("context arrays"), and the per-lane loads of one
- * field are consecutive across the work-items, which its loop vectoriser
- * turns into vector loads. (Kept in private structs across barriers, the
- * fields came out pre-packed in 2-wide vectors, which the vectoriser
- * refuses: "instruction return type cannot be vectorized".) */
-#define CR_PACKET_RAY_FIELDS 14
-#define CR_PACKET_HIT_FIELDS 3
-
-CR_FUNC void BVHPacket_StoreRay(__local real* sRay, __local uint* sAxes, uint lid, uint nLanes, const Ray* r)
-{
-  CR_UNROLL for (int a = 0; a < 3; ++a) {
-    sRay[(0 + a) * nLanes + lid] = r->org[a];
-    sRay[(3 + a) * nLanes + lid] = r->dir[a];
-    sRay[(6 + a) * nLanes + lid] = r->inv[a];
-  }
-  sRay[9 * nLanes + lid] = r->tmin;
-  sRay[10 * nLanes + lid] = r->tmax;
-  sRay[11 * nLanes + lid] = r->sx;
-  sRay[12 * nLanes + lid] = r->sy;
-  sRay[13 * nLanes + lid] = r->sz;
-  sAxes[lid] = (uint)r->kx | ((uint)r->ky << 2) | ((uint)r->kz << 4);
-}
-
-CR_FUNC void BVHPacket_LoadRay(__local const real* sRay, __local const uint* sAxes, uint lid, uint nLanes, Ray* r)
-{
-  CR_UNROLL for (int a = 0; a < 3; ++a) {
-    r->org[a] = sRay[(0 + a) * nLanes + lid];
-    r->dir[a] = sRay[(3 + a) * nLanes + lid];
-    r->inv[a] = sRay[(6 + a) * nLanes + lid];
-  }
-  r->tmin = sRay[9 * nLanes + lid];
-  r->tmax = sRay[10 * nLanes + lid];
-  r->sx = sRay[11 * nLanes + lid];
-  r->sy = sRay[12 * nLanes + lid];
-  r->sz = sRay[13 * nLanes + lid];
-  const uint k = sAxes[lid];
-  r->kx = (int)(k & 3u);
-  r->ky = (int)((k >> 2) & 3u);
-  r->kz = (int)((k >> 4) & 3u);
-}
-
-CR_FUNC void BVHPacket_StoreHit(__local real* sHit, __local uint* sHitG, uint lid, uint nLanes, const Hit* h)
-{
-  sHit[lid] = h->t;
-  sHit[nLanes + lid] = h->u;
-  sHit[2 * nLanes + lid] = h->v;
-  sHitG[lid] = h->g;
-}
-
-CR_FUNC void BVHPacket_LoadHit(__local const real* sHit, __local const uint* sHitG, uint lid, uint nLanes, Hit* h)
-{
-  h->t = sHit[lid];
-  h->u = sHit[nLanes + lid];
-  h->v = sHit[2 * nLanes + lid];
-  h->g = sHitG[lid];
-}
-
-/* Keeps a candidate hit if the lane wants it and it is closer (Hit_Closer),
- * with selects rather than branches so that the work-item loop stays
- * straight-line. Returns 1 when the hit changed. */
-CR_FUNC int BVHPacket_Commit(Hit* hit, int want, real t, real u, real v, uint g)
-{
-  const int take = want & Hit_Closer(t, g, hit);
-  hit->t = take ? t : hit->t;
-  hit->u = take ? u : hit->u;
-  hit->v = take ? v : hit->v;
-  hit->g = take ? g : hit->g;
-  return take;
-}
-
 /* Closest or any hit of each lane's ray, already stored in sRay, sAxes, sHit,
- * sHitG with BVHPacket_StoreRay / BVHPacket_StoreHit (read the answer back
- * with BVHPacket_LoadHit after it returns); `live` is 0 for a lane without a
+ * sHitG with Packet_StoreRay / Packet_StoreHit (packet.cl; read the answer
+ * back with Packet_LoadHit after it returns); `live` is 0 for a lane without a
  * ray. Local memory: sStack CR_BVH_STACK node indices, sLane one word per
  * lane (the lanes' verdicts), sState four words (next node, stack size,
  * leaf range), sNode the node under test. None may be restrict: values pass between
@@ -205,7 +131,7 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
     uint vote;
     {
       Ray ray;
-      BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
+      Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
       in = live & BVHPacket_Box(sNode, &ray, ray.tmin, Cull_Distance(sHit[lid]));
       const real w = (real)sNode[6] * ray.dir[0] + (real)sNode[7] * ray.dir[1] + (real)sNode[8] * ray.dir[2];
       vote = (w < (real)0.0f ? 1u : 0u) & (uint)in & interior;
@@ -254,30 +180,12 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
         const uint g = refs[sState[2] + k];
         Ray ray;
         Hit hit;
-        BVHPacket_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-        BVHPacket_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-        real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
-        int found = 0;
-#if CR_HAS_SPHERES
-        if (g < pv->nSpheres) {
-          const Sphere prim = pv->spheres[g];
-          found = Sphere_Intersect(&ray, &prim, ray.tmin, hit.t, &t);
-        }
-#endif
-#if CR_HAS_TRIANGLES
-        if (g >= pv->nSpheres && g < pv->nSpheres + pv->nTriangles) {
-          const Triangle prim = pv->triangles[g - pv->nSpheres];
-          found = Triangle_Intersect(&ray, &prim, ray.tmin, hit.t, &t, &u, &v);
-        }
-#endif
-#if CR_HAS_CONES
-        if (g >= pv->nSpheres + pv->nTriangles) {
-          const Cone prim = pv->cones[g - pv->nSpheres - pv->nTriangles];
-          found = Cone_Intersect(&ray, &prim, ray.tmin, hit.t, &t);
-        }
-#endif
-        const int took = BVHPacket_Commit(&hit, want & found, t, u, v, g);
-        BVHPacket_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+        Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
+        Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
+        real t, u, v;
+        const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
+        const int took = Packet_Commit(&hit, want & found, t, u, v, g);
+        Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
         live = live & !(took & anyHit);
       }
 #ifdef CR_STATS

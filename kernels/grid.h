@@ -33,42 +33,87 @@ CR_FUNC real Grid_Plane(CR_GLOBAL const GridHeader* g, int axis, int i)
   return (real)p;
 }
 
+/* The walk's first cell: 0 when the ray misses the grid box within
+ * [tmin, tMax], else 1 with the cell the ray enters the box in. */
+CR_FUNC int Grid_Enter(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tMax, int cell[3])
+{
+  real tEnter;
+  if (!Box_Intersect(grid->bmin, grid->bmax, ray, ray->tmin, tMax, &tEnter)) return 0;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const int res = (int)grid->res[a];
+    /* First guess from the entry point (the conservative box test may put it
+     * slightly outside the box: clamp before converting to int). */
+    const real p = ray->org[a] + tEnter * ray->dir[a];
+    real rel = (p - Grid_Plane(grid, a, 0)) / (real)grid->cellSize[a];
+    rel = fmin(fmax(rel, (real)0.0f), (real)(res - 1));
+    int c = (int)floor(rel);
+    /* Then make it consistent with the plane parameters the walk uses. The
+     * sign of inv, not of dir, so that -0 steps down and +0 up, as the NaN
+     * rule of Ray_PlaneT assumes. */
+    if (!(ray->inv[a] < (real)0.0f)) {
+      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) > tEnter) --c;
+      while (c < res - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) < tEnter) ++c;
+    } else {
+      while (c < res - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) > tEnter) ++c;
+      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) < tEnter) --c;
+    }
+    cell[a] = c;
+  }
+  return 1;
+}
+
+/* Index of a cell in cellStart. */
+CR_FUNC uint Grid_CellIndex(CR_GLOBAL const GridHeader* grid, const int cell[3])
+{
+  return (uint)cell[0] + grid->res[0] * ((uint)cell[1] + grid->res[1] * (uint)cell[2]);
+}
+
+/* One step of the walk, after the current cell's references were tested:
+ * 0 when the walk ends (the closest hit so far, hitT, or tmax lies at or
+ * before the cell's exit, or the exit face is the grid's), else 1 with
+ * `cell` moved to the neighbour across the exit face. `cell` is left as it
+ * was when the walk ends. Straight-line code (selects, no indexing by a
+ * computed axis) so that a packet's lanes can run it side by side. */
+CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3])
+{
+  /* Exit face: the smallest crossing parameter of the three exit planes. */
+  int axis = 0;
+  real tExit = (real)CR_INF;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const int plane = ray->inv[a] < (real)0.0f ? cell[a] : cell[a] + 1;
+    const real t = Ray_PlaneT(ray, a, Grid_Plane(grid, a, plane));
+    if (t < tExit) {
+      tExit = t;
+      axis = a;
+    }
+  }
+  /* hitT is the closest hit so far, or tmax: either way nothing farther can
+   * beat it once the walk has passed it. */
+  if (hitT <= tExit) return 0;
+  int next[3];
+  int inside = 1;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const int step = a != axis ? 0 : ray->inv[a] < (real)0.0f ? -1 : 1;
+    next[a] = cell[a] + step;
+    inside &= (next[a] >= 0 && next[a] < (int)grid->res[a]) ? 1 : 0;
+  }
+  if (!inside) return 0;
+  CR_UNROLL for (int a = 0; a < 3; ++a) cell[a] = next[a];
+  return 1;
+}
+
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * grid; `hit` must come from Hit_Init. */
 CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart, CR_GLOBAL const uint* refs,
                         const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
 {
   if (grid->nRefs == 0u) return;
-  real tEnter;
-  if (!Box_Intersect(grid->bmin, grid->bmax, ray, ray->tmin, hit->t, &tEnter)) return;
-
-  int cell[3], step[3], res[3];
-  for (int a = 0; a < 3; ++a) {
-    res[a] = (int)grid->res[a];
-    /* The sign of inv, not of dir, so that -0 steps down and +0 up, as the
-     * NaN rule of Ray_PlaneT assumes. */
-    step[a] = ray->inv[a] < (real)0.0f ? -1 : 1;
-    /* First guess from the entry point (the conservative box test may put it
-     * slightly outside the box: clamp before converting to int). */
-    const real p = ray->org[a] + tEnter * ray->dir[a];
-    real rel = (p - Grid_Plane(grid, a, 0)) / (real)grid->cellSize[a];
-    rel = fmin(fmax(rel, (real)0.0f), (real)(res[a] - 1));
-    int c = (int)floor(rel);
-    /* Then make it consistent with the plane parameters the walk uses. */
-    if (step[a] > 0) {
-      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) > tEnter) --c;
-      while (c < res[a] - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) < tEnter) ++c;
-    } else {
-      while (c < res[a] - 1 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c + 1)) > tEnter) ++c;
-      while (c > 0 && Ray_PlaneT(ray, a, Grid_Plane(grid, a, c)) < tEnter) --c;
-    }
-    cell[a] = c;
-  }
-
-  for (;;) {
+  int cell[3];
+  if (!Grid_Enter(grid, ray, hit->t, cell)) return;
+  do {
     CR_COUNT(st, nTS);
     CR_COUNT(st, nLeaves);
-    const uint idx = (uint)cell[0] + grid->res[0] * ((uint)cell[1] + grid->res[1] * (uint)cell[2]);
+    const uint idx = Grid_CellIndex(grid, cell);
     const uint end = cellStart[idx + 1u];
     const uint begin = cellStart[idx];
     if (begin == end) CR_COUNT(st, nEmptyLeaves);
@@ -76,23 +121,7 @@ CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* 
       CR_COUNT(st, nIT);
       if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return;
     }
-    /* Exit face: the smallest crossing parameter of the three exit planes. */
-    int axis = 0;
-    real tExit = (real)CR_INF;
-    for (int a = 0; a < 3; ++a) {
-      const int plane = step[a] > 0 ? cell[a] + 1 : cell[a];
-      const real t = Ray_PlaneT(ray, a, Grid_Plane(grid, a, plane));
-      if (t < tExit) {
-        tExit = t;
-        axis = a;
-      }
-    }
-    /* hit->t is the closest hit so far, or tmax: either way nothing farther
-     * can beat it once the walk has passed it. */
-    if (hit->t <= tExit) return;
-    cell[axis] += step[axis];
-    if (cell[axis] < 0 || cell[axis] >= res[axis]) return;
-  }
+  } while (Grid_Next(grid, ray, hit->t, cell));
 }
 
 #endif /* CELLRAY_KERNELS_GRID_H */

@@ -140,9 +140,9 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
     B[i] = (real)tri->v1[i] - r->org[i];
     C[i] = (real)tri->v2[i] - r->org[i];
   }
-  const real Ax = A[kx] - r->sx * A[kz], Ay = A[ky] - r->sy * A[kz];
-  const real Bx = B[kx] - r->sx * B[kz], By = B[ky] - r->sy * B[kz];
-  const real Cx = C[kx] - r->sx * C[kz], Cy = C[ky] - r->sy * C[kz];
+  const real Ax = CR_PICK3(A, kx) - r->sx * CR_PICK3(A, kz), Ay = CR_PICK3(A, ky) - r->sy * CR_PICK3(A, kz);
+  const real Bx = CR_PICK3(B, kx) - r->sx * CR_PICK3(B, kz), By = CR_PICK3(B, ky) - r->sy * CR_PICK3(B, kz);
+  const real Cx = CR_PICK3(C, kx) - r->sx * CR_PICK3(C, kz), Cy = CR_PICK3(C, ky) - r->sy * CR_PICK3(C, kz);
   const real U = Cx * By - Cy * Bx;
   const real V = Ax * Cy - Ay * Cx;
   const real W = Bx * Ay - By * Ax;
@@ -174,8 +174,10 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   const int k1 = k == 2 ? 0 : k + 1;
   real ea[3], eb[3], p[3];
   CR_UNROLL for (int i = 0; i < 3; ++i) {
-    ea[i] = e[3 * k + i];
-    eb[i] = e[3 * k1 + i];
+    /* selects, not e[3 * k + i]: an array indexed by a computed value stays
+     * in memory and keeps PoCL from vectorising the packet kernels' test */
+    ea[i] = k == 0 ? e[i] : (k == 1 ? e[3 + i] : e[6 + i]);
+    eb[i] = k1 == 0 ? e[i] : (k1 == 1 ? e[3 + i] : e[6 + i]);
     p[i] = k == 0 ? B[i] : (k == 1 ? C[i] : A[i]);
   }
   real n[3];

@@ -46,7 +46,7 @@ CR_FUNC float Octree_Plane(CR_GLOBAL const OctreeHeader* hdr, int axis, uint lev
 CR_FUNC void Octree_CellT(CR_GLOBAL const OctreeHeader* hdr, const Ray* ray, uint signMask, uint level, const uint c[3],
                           real t0[3], real tm[3], real t1[3])
 {
-  for (int a = 0; a < 3; ++a) {
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
     const real lo = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level, c[a]));
     const real hi = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level, c[a] + 1u));
     tm[a] = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, level + 1u, 2u * c[a] + 1u));

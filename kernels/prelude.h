@@ -76,6 +76,18 @@ inline uint cr_minu(uint a, uint b) { return a < b ? a : b; }
 #define CR_UNROLL
 #endif
 
+/* v[k] for an axis k in {0, 1, 2} computed at run time: selects in OpenCL,
+ * so that the array is not indexed by a value, which would keep it in
+ * private memory, where the OpenCL compiler's SLP vectoriser packs its
+ * stores into 2-wide vectors and PoCL's work-item loop vectoriser then
+ * refuses the region ("instruction return type cannot be vectorized").
+ * Plain indexing in C++: the same value either way. */
+#ifdef CR_OPENCL
+#define CR_PICK3(v, k) ((k) == 0 ? (v)[0] : (k) == 1 ? (v)[1] : (v)[2])
+#else
+#define CR_PICK3(v, k) ((v)[k])
+#endif
+
 #ifdef CR_OPENCL
 #define cr_min(a, b) min((int)(a), (int)(b))
 #define cr_max(a, b) max((int)(a), (int)(b))

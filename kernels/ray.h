@@ -60,7 +60,7 @@ CR_FUNC void Ray_Init(Ray* r, const RayRecord* rec)
   int kz = (ax > ay) ? ((ax > az) ? 0 : 2) : ((ay > az) ? 1 : 2);
   int kx = kz + 1 == 3 ? 0 : kz + 1;
   int ky = kx + 1 == 3 ? 0 : kx + 1;
-  if (r->dir[kz] < (real)0.0f) {
+  if (CR_PICK3(r->dir, kz) < (real)0.0f) {
     int tmp = kx;
     kx = ky;
     ky = tmp;
@@ -68,9 +68,9 @@ CR_FUNC void Ray_Init(Ray* r, const RayRecord* rec)
   r->kx = kx;
   r->ky = ky;
   r->kz = kz;
-  r->sx = r->dir[kx] / r->dir[kz];
-  r->sy = r->dir[ky] / r->dir[kz];
-  r->sz = (real)1.0f / r->dir[kz];
+  r->sx = CR_PICK3(r->dir, kx) / CR_PICK3(r->dir, kz);
+  r->sy = CR_PICK3(r->dir, ky) / CR_PICK3(r->dir, kz);
+  r->sz = (real)1.0f / CR_PICK3(r->dir, kz);
 }
 
 CR_FUNC void Hit_Init(Hit* h, const Ray* r)

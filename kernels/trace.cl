@@ -49,13 +49,23 @@ typedef float4 camreal4;
 #include "bvh.h"
 #endif
 #if defined(CR_ACCEL_GRID) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_OCTREE))
+#define CR_WITH_GRID 1
 #include "grid.h"
 #endif
 #if defined(CR_ACCEL_OCTREE) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_GRID))
+#define CR_WITH_OCTREE 1
 #include "octree.h"
 #endif
-#if defined(CR_WITH_BVH) && !defined(CR_VARIANT_RAY)
+#if !defined(CR_VARIANT_RAY)
+#ifdef CR_WITH_BVH
 #include "bvh_packet.cl"
+#endif
+#ifdef CR_WITH_GRID
+#include "grid_packet.cl"
+#endif
+#ifdef CR_WITH_OCTREE
+#include "octree_packet.cl"
+#endif
 #endif
 
 /* Argument values of the `accel` parameter (generic build). */
@@ -152,6 +162,9 @@ CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceSt
 #endif
 }
 
+/* The structure arguments of Trace_One and Trace_Packet, by name. */
+#define CR_TRACE_ONE_ARGS bvhNodes, bvhRefs, grid, cellStart, gridRefs, octree, octNodes, octRefs, accel
+
 #if !defined(CR_VARIANT_PACKET)
 
 /* One ray through the structure the build (or `accel`) selects. */
@@ -176,8 +189,6 @@ CR_FUNC void Trace_One(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR
     Octree_Trace(octree, octNodes, octRefs, pv, ray, hit, anyHit, st);
 #endif
 }
-
-#define CR_TRACE_ONE_ARGS bvhNodes, bvhRefs, grid, cellStart, gridRefs, octree, octNodes, octRefs, accel
 
 /* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]. */
 #ifndef CR_SOURCE_CAMERA
@@ -225,42 +236,105 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 #endif
 #endif /* !CR_VARIANT_PACKET */
 
-#if defined(CR_WITH_BVH) && !defined(CR_VARIANT_RAY)
+#if !defined(CR_VARIANT_RAY)
 
 /* The local memory of a packet traversal, declared at kernel scope (OpenCL
- * 1.2 allows __local variables only there). */
-#define CR_PACKET_LOCALS                                      \
-  __local uint sStack[CR_BVH_STACK];                          \
-  __local uint sLane[CR_PACKET_SIZE];                         \
-  __local uint sState[4];                                     \
-  __local float sNode[CR_PACKET_NODE_FIELDS];                 \
-  __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE];   \
-  __local uint sAxes[CR_PACKET_SIZE];                         \
-  __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE];   \
+ * 1.2 allows __local variables only there): the lanes' rays and hits
+ * (packet.cl), one word per lane, the group's state words, and what the
+ * compiled structures' traversals need. The parameters and arguments that
+ * pass them on follow the same pieces. */
+#define CR_PACKET_STATE_WORDS 12
+#define CR_PACKET_LOCALS_COMMON                             \
+  __local uint sLane[CR_PACKET_SIZE];                       \
+  __local uint sState[CR_PACKET_STATE_WORDS];               \
+  __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE]; \
+  __local uint sAxes[CR_PACKET_AXES_FIELDS * CR_PACKET_SIZE];\
+  __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE]; \
   __local uint sHitG[CR_PACKET_SIZE]
-#define CR_PACKET_LOCAL_ARGS sStack, sLane, sState, sNode, sRay, sAxes, sHit, sHitG
+#define CR_PACKET_PARAMS_COMMON                                                                                \
+  __local uint *sLane, __local uint *sState, __local real *sRay, __local uint *sAxes, __local real *sHit, \
+      __local uint *sHitG
+#define CR_PACKET_ARGS_COMMON sLane, sState, sRay, sAxes, sHit, sHitG
+#ifdef CR_WITH_BVH
+#define CR_PACKET_LOCALS_BVH         \
+  __local uint sBvhStack[CR_BVH_STACK]; \
+  __local float sBvhNode[CR_PACKET_NODE_FIELDS];
+#define CR_PACKET_PARAMS_BVH , __local uint *sBvhStack, __local float *sBvhNode
+#define CR_PACKET_ARGS_BVH , sBvhStack, sBvhNode
+#else
+#define CR_PACKET_LOCALS_BVH
+#define CR_PACKET_PARAMS_BVH
+#define CR_PACKET_ARGS_BVH
+#endif
+#ifdef CR_WITH_GRID
+#define CR_PACKET_LOCALS_GRID                   \
+  __local int sGridCell[3 * CR_PACKET_SIZE];    \
+  __local uint sGridRange[2 * CR_PACKET_SIZE];
+#define CR_PACKET_PARAMS_GRID , __local int *sGridCell, __local uint *sGridRange
+#define CR_PACKET_ARGS_GRID , sGridCell, sGridRange
+#else
+#define CR_PACKET_LOCALS_GRID
+#define CR_PACKET_PARAMS_GRID
+#define CR_PACKET_ARGS_GRID
+#endif
+#ifdef CR_WITH_OCTREE
+#define CR_PACKET_LOCALS_OCTREE                                          \
+  __local uint sOctStack[CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY]; \
+  __local float sOctPlane[CR_OCTREE_PACKET_PLANES];
+#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack, __local float *sOctPlane
+#define CR_PACKET_ARGS_OCTREE , sOctStack, sOctPlane
+#else
+#define CR_PACKET_LOCALS_OCTREE
+#define CR_PACKET_PARAMS_OCTREE
+#define CR_PACKET_ARGS_OCTREE
+#endif
+#define CR_PACKET_LOCALS \
+  CR_PACKET_LOCALS_BVH CR_PACKET_LOCALS_GRID CR_PACKET_LOCALS_OCTREE CR_PACKET_LOCALS_COMMON
+#define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_PACKET_PARAMS_BVH CR_PACKET_PARAMS_GRID CR_PACKET_PARAMS_OCTREE
+#define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_PACKET_ARGS_BVH CR_PACKET_ARGS_GRID CR_PACKET_ARGS_OCTREE
 
-/* The hit of one lane's ray after the group's packet traversal. */
+/* The hit of one lane's ray after the group's packet traversal of the
+ * structure the build (or `accel`, the same for the whole group) selects. */
 CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
-                         const RayRecord* rec, int live, uint lid, int anyHit, TraceStats* st,
-                         __local uint* sStack, __local uint* sLane, __local uint* sState,
-                         __local float* sNode, __local real* sRay, __local uint* sAxes, __local real* sHit,
-                         __local uint* sHitG)
+                         CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart,
+                         CR_GLOBAL const uint* gridRefs, CR_GLOBAL const OctreeHeader* octree,
+                         CR_GLOBAL const OctreeNode* octNodes, CR_GLOBAL const uint* octRefs, int accel,
+                         const RayRecord* rec, int live, uint lid, int anyHit, TraceStats* st, CR_PACKET_PARAMS)
 {
   Ray ray;
   Ray_Init(&ray, rec);
   Hit hit;
   Hit_Init(&hit, &ray);
-  BVHPacket_StoreRay(sRay, sAxes, lid, CR_PACKET_SIZE, &ray);
-  BVHPacket_StoreHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
-  BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, CR_PACKET_LOCAL_ARGS);
-  BVHPacket_LoadHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
+  Packet_StoreRay(sRay, sAxes, lid, CR_PACKET_SIZE, &ray);
+  Packet_StoreHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
+#if defined(CR_ACCEL_BVH)
+  BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState, sBvhNode,
+                  sRay, sAxes, sHit, sHitG);
+#elif defined(CR_ACCEL_GRID)
+  GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState, sGridCell,
+                   sGridRange, sRay, sAxes, sHit, sHitG);
+#elif defined(CR_ACCEL_OCTREE)
+  OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane, sState,
+                     sRay, sAxes, sHit, sHitG);
+#else
+  if (accel == CR_ACCEL_ARG_BVH)
+    BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState,
+                    sBvhNode, sRay, sAxes, sHit, sHitG);
+  else if (accel == CR_ACCEL_ARG_GRID)
+    GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState,
+                     sGridCell, sGridRange, sRay, sAxes, sHit, sHitG);
+  else
+    OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane,
+                       sState, sRay, sAxes, sHit, sHitG);
+#endif
+  Packet_LoadHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
   return hit;
 }
 
 #ifndef CR_SOURCE_CAMERA
 /* Packet variant: the work-group is a packet (consecutive rays) that walks the
- * BVH together (bvh_packet.cl). Lanes past nRays take part without a ray. */
+ * structure together (bvh_packet.cl, grid_packet.cl, octree_packet.cl).
+ * Lanes past nRays take part without a ray. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
     CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
     CR_GLOBAL TraceStats* stats)
@@ -272,8 +346,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_
   const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
   const RayRecord rec = Trace_LoadRay(rays, live ? i : 0);
   TraceStats st = {0, 0, 0, 0};
-  const Hit hit = Trace_Packet(&pv, bvhNodes, bvhRefs, &rec, live, lid, CR_QUERY_ANYHIT, &st,
-                               CR_PACKET_LOCAL_ARGS);
+  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
   if (live) {
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
     Trace_StoreStats(stats, i, &st);
@@ -296,8 +369,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
   const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, live ? px : 0, live ? py : 0, width, height);
   TraceStats st = {0, 0, 0, 0};
-  const Hit hit = Trace_Packet(&pv, bvhNodes, bvhRefs, &rec, live, lid, CR_QUERY_ANYHIT, &st,
-                               CR_PACKET_LOCAL_ARGS);
+  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
   if (live) {
     const uint i = (uint)py * (uint)width + (uint)px;
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
@@ -306,4 +378,4 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
 }
 
 #endif
-#endif /* packet BVH */
+#endif /* !CR_VARIANT_RAY */

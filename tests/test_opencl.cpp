@@ -126,14 +126,12 @@ Comparison Compare(const std::vector<HitRecord>& cl, const std::vector<HitRecord
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 constexpr int kRaySize = 24;  // 576 rays per scene and kind
 
-// Every SPD scene x ray kind with `accel`, for the ray and packet variants
-// (packet where the structure has one).
+// Every SPD scene x ray kind with `accel`, for the ray and packet variants.
 void RunConformance(AccelKind accel)
 {
   auto cache = TestCacheDir();
   std::size_t ties = 0, otherOccluders = 0;
-  std::vector<std::string> variants = {"ray"};
-  if (accel == AccelKind::BVH) variants.push_back("packet");
+  const std::vector<std::string> variants = {"ray", "packet"};
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     TraceConfig sc;
@@ -334,14 +332,14 @@ TEST_CASE("opencl: conformance, bvh, ray and packet variants, every SPD scene x 
   RunConformance(AccelKind::BVH);
 }
 
-// Grid and octree traversals come from their own branches (kernels/grid.h,
-// kernels/octree.h); until they land these fail.
-TEST_CASE("opencl: conformance, grid, every SPD scene x ray kind" * doctest::skip(NoOpenCL()))
+TEST_CASE("opencl: conformance, grid, ray and packet variants, every SPD scene x ray kind" *
+          doctest::skip(NoOpenCL()))
 {
   RunConformance(AccelKind::Grid);
 }
 
-TEST_CASE("opencl: conformance, octree, every SPD scene x ray kind" * doctest::skip(NoOpenCL()))
+TEST_CASE("opencl: conformance, octree, ray and packet variants, every SPD scene x ray kind" *
+          doctest::skip(NoOpenCL()))
 {
   RunConformance(AccelKind::Octree);
 }
@@ -384,31 +382,68 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
   auto cache = TestCacheDir();
   const Scene& scene = test::CachedScene(test::SpdPath("mount"));
   const auto rays = test::MakeRays(scene, RayKind::Diffuse, 20);
-  TraceConfig sc;
-  sc.stats = true;
-  sc.unifiedHits = true;
-  TraceStatsSum scalarStats;
-  std::vector<HitRecord> ref;
-  CreateTracer(scene, sc)->Trace(rays, ref, false, &scalarStats);
-  for (const char* variant : {"ray", "packet"}) {
-    TraceConfig cfg = sc;
-    cfg.backend = Backend::OpenCL;
-    cfg.variant = variant;
-    TraceStatsSum stats;
-    std::vector<HitRecord> hits;
-    CreateTracer(scene, cfg)->Trace(rays, hits, false, &stats);
-    INFO(variant);
-    CHECK(Compare(hits, ref, false).differ == 0);  // unified ids and barycentrics of every piece
-    CHECK(stats.rays == rays.size());
-    CHECK(stats.nIT > 0);
-    CHECK(stats.nTS > 0);
-    if (std::string(variant) == "ray") {
-      // The same traversal as the scalar backend: the same counts.
-      CHECK(stats.nIT == scalarStats.nIT);
-      CHECK(stats.nTS == scalarStats.nTS);
-      CHECK(stats.nLeaves == scalarStats.nLeaves);
+  for (AccelKind accel : {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree}) {
+    TraceConfig sc;
+    sc.accel = accel;
+    sc.stats = true;
+    sc.unifiedHits = true;
+    TraceStatsSum scalarStats;
+    std::vector<HitRecord> ref;
+    CreateTracer(scene, sc)->Trace(rays, ref, false, &scalarStats);
+    for (const char* variant : {"ray", "packet"}) {
+      TraceConfig cfg = sc;
+      cfg.backend = Backend::OpenCL;
+      cfg.variant = variant;
+      TraceStatsSum stats;
+      std::vector<HitRecord> hits;
+      CreateTracer(scene, cfg)->Trace(rays, hits, false, &stats);
+      INFO(std::string(AccelKindName(accel)), " ", variant);
+      CHECK(Compare(hits, ref, false).differ == 0);  // unified ids and barycentrics of every piece
+      CHECK(stats.rays == rays.size());
+      CHECK(stats.nIT > 0);
+      CHECK(stats.nTS > 0);
+      // The per-ray kernels run the scalar backend's traversal, and so does
+      // each lane of the grid packet (its own 3D-DDA): the same counts.
+      if (std::string(variant) == "ray" || accel == AccelKind::Grid) {
+        CHECK(stats.nIT == scalarStats.nIT);
+        CHECK(stats.nTS == scalarStats.nTS);
+        CHECK(stats.nLeaves == scalarStats.nLeaves);
+        CHECK(stats.nEmptyLeaves == scalarStats.nEmptyLeaves);
+      }
     }
   }
+}
+
+TEST_CASE("opencl: a scene without primitives misses everywhere, every structure, packets" *
+          doctest::skip(NoOpenCL()))
+{
+  // The generic programs model every primitive type: a packet must not read
+  // a primitive (or a reference) that the scene does not have. (The per-ray
+  // kernels read only what a leaf or cell lists.)
+  auto cache = TestCacheDir();
+  const Scene scene;
+  std::vector<RayRecord> rays(40);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const float x = float(i) / float(rays.size());
+    rays[i] = RayRecord{{x, 0.5f, -1.0f}, 0.0f, {0.1f * x, 0.0f, 1.0f}, CR_INF};
+  }
+  for (AccelKind accel : {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree})
+    for (const char* variant : {"packet", "packet-generic"}) {
+      TraceConfig cfg;
+      cfg.backend = Backend::OpenCL;
+      cfg.accel = accel;
+      cfg.variant = variant;
+      auto tracer = CreateTracer(scene, cfg);
+      for (bool occlusion : {false, true}) {
+        std::vector<HitRecord> hits;
+        tracer->Trace(rays, hits, occlusion, nullptr);
+        INFO(std::string(AccelKindName(accel)), " ", variant, occlusion ? " occlusion" : " closest");
+        REQUIRE(hits.size() == rays.size());
+        std::size_t nHit = 0;
+        for (const auto& h : hits) nHit += h.prim != CR_NO_HIT;
+        CHECK(nHit == 0);
+      }
+    }
 }
 
 TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * doctest::skip(NoOpenCL()))

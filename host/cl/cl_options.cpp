@@ -1,15 +1,34 @@
 #include "cl/cl_options.h"
 
+#include <cstdio>
+
 #include <fmt/format.h>
 
 #include "core/error.h"
 
 namespace cr {
 
-void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic)
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW, int* tileH)
 {
   std::string v = s;
   generic = false;
+  if (tileW) *tileW = 0;
+  if (tileH) *tileH = 0;
+  const auto bad = [&] {
+    return InputError(fmt::format("--variant '{}': the opencl backend has ray and packet, each also as ray-generic, "
+                                  "packet-generic, optionally with a work-group tile :WxH (e.g. packet:8x8)",
+                                  s));
+  };
+  if (const auto colon = v.find(':'); colon != std::string::npos) {
+    int w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(v.c_str() + colon + 1, "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 1024 ||
+        h > 1024)
+      throw bad();
+    if (tileW) *tileW = w;
+    if (tileH) *tileH = h;
+    v.resize(colon);
+  }
   const std::string suffix = "-generic";
   if (v.size() >= suffix.size() && v.compare(v.size() - suffix.size(), suffix.size(), suffix) == 0) {
     generic = true;
@@ -23,8 +42,7 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic)
     variant = ClVariant::Packet;
     return;
   }
-  throw InputError(fmt::format(
-      "--variant '{}': the opencl backend has ray and packet (each also as ray-generic, packet-generic)", s));
+  throw bad();
 }
 
 const char* ClVariantName(ClVariant v) { return v == ClVariant::Packet ? "packet" : "ray"; }
@@ -33,11 +51,8 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
                                 const ClDevice& dev)
 {
   ClProgramSpec s;
-  ParseClVariant(config.variant, s.variant, s.generic);
-  if (s.variant == ClVariant::Packet && config.accel != AccelKind::BVH)
-    throw InputError(fmt::format("--variant packet: the opencl backend has packet traversal for bvh only so far "
-                                 "(--accel {} runs --variant ray)",
-                                 AccelKindName(config.accel)));
+  int tileW = 0, tileH = 0;
+  ParseClVariant(config.variant, s.variant, s.generic, &tileW, &tileH);
   if (config.precision == Precision::Fp64 && !dev.fp64)
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
@@ -52,10 +67,24 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     s.triangles = !scene.triangles.empty();
     s.cones = !scene.cones.empty();
   }
-  // A packet is one work-group: 64 lanes where the device allows it.
-  if (dev.maxWorkGroupSize < 64) {
-    s.packetW = 8;
-    s.packetH = static_cast<int>(dev.maxWorkGroupSize / 8 > 0 ? dev.maxWorkGroupSize / 8 : 1);
+  // A packet is one work-group, a screen tile of primary rays. On a CPU
+  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was
+  // 10-35% slower for the octree and the BVH and the same for the grid, 4x2
+  // within noise of 4x4 (docs/OPENCL.md). Elsewhere 8x8, an AMD wavefront or
+  // two NVIDIA warps, not measured. Smaller where the device limits
+  // work-groups.
+  if (tileW > 0) {
+    if (std::size_t(tileW) * std::size_t(tileH) > dev.maxWorkGroupSize)
+      throw InputError(fmt::format("--variant {}: a {}x{} work-group exceeds the {} work-items of '{}'",
+                                   config.variant, tileW, tileH, dev.maxWorkGroupSize, dev.name));
+    s.packetW = tileW;
+    s.packetH = tileH;
+  } else {
+    s.packetW = s.packetH = dev.type == "cpu" ? 4 : 8;
+    if (std::size_t(s.packetW) * std::size_t(s.packetH) > dev.maxWorkGroupSize) {
+      s.packetW = 8;
+      s.packetH = static_cast<int>(dev.maxWorkGroupSize / 8 > 0 ? dev.maxWorkGroupSize / 8 : 1);
+    }
   }
   return s;
 }

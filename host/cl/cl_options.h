@@ -25,7 +25,7 @@ struct ClProgramSpec {
   bool stats = false;
   ClVariant variant = ClVariant::Ray;
   bool camera = false;           // primary rays generated on the device, else rays from a buffer
-  int packetW = 8, packetH = 8;  // work-group tile of the packet kernels
+  int packetW = 8, packetH = 8;  // work-group tile (the packet of the packet kernels)
   bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's
   // Hook for the renderer's kernels: extra "NAME=VALUE" definitions (material
   // count, light count), appended as -D options.
@@ -44,8 +44,11 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
 // that way), so that results match the scalar backend bit for bit.
 std::string ClBuildOptions(const ClProgramSpec& spec, const ClDevice& dev);
 
-// Parses --variant: "", "ray", "packet", optionally suffixed "-generic".
-void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic);
+// Parses --variant: "", "ray", "packet", optionally suffixed "-generic", then
+// optionally ":WxH", the work-group tile (packet size; tileW, tileH 0 when
+// absent: the device's default, see MakeClProgramSpec).
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW = nullptr,
+                    int* tileH = nullptr);
 const char* ClVariantName(ClVariant v);
 
 }  // namespace cr

@@ -90,7 +90,9 @@ class ClTracer final : public Tracer {
   {
     ParseClVariant(cfg.variant, variant_, generic_);
     // Validate the device and options before the (slow) structure build.
-    (void)MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
+    const ClProgramSpec spec = MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
+    tileW_ = spec.packetW;
+    tileH_ = spec.packetH;
     AccelData data = BuildAccel(scene, cfg.accel, cfg.params);
     info_ = data.info;
     Upload(data);
@@ -149,8 +151,8 @@ class ClTracer final : public Tracer {
 
   std::string VariantName() const override
   {
-    return fmt::format("{} {}{}", PrecisionName(config_.precision), ClVariantName(variant_),
-                       generic_ ? " generic" : "");
+    return fmt::format("{} {}{} {}x{}", PrecisionName(config_.precision), ClVariantName(variant_),
+                       generic_ ? " generic" : "", tileW_, tileH_);
   }
 
   void Describe(nlohmann::json& j) const override
@@ -376,6 +378,7 @@ class ClTracer final : public Tracer {
   ClContext cl_;
   ClVariant variant_ = ClVariant::Ray;
   bool generic_ = false;
+  int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
   cl::Buffer dummy_, spheres_, triangles_, cones_, primIds_;
   cl::Buffer bvhNodes_, bvhRefs_, gridHeader_, cellStart_, gridRefs_, octHeader_, octNodes_, octRefs_;
