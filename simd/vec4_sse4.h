@@ -121,6 +121,14 @@ CR_SIMD_INLINE vint<4> Select(vbool<4> m, vint<4> a, vint<4> b)
 {
   return vint<4>(_mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(b.v), _mm_castsi128_ps(a.v), m.m)));
 }
+CR_SIMD_INLINE vint<4> operator-(vint<4> a, vint<4> b) { return vint<4>(_mm_sub_epi32(a.v, b.v)); }
+// Signed comparisons.
+CR_SIMD_INLINE vbool<4> operator<(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmplt_epi32(a.v, b.v))); }
+CR_SIMD_INLINE vbool<4> operator>(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmpgt_epi32(a.v, b.v))); }
+// (float)i, exact below 2^24 (cell and plane indices).
+CR_SIMD_INLINE vfloat<4> ToFloat(vint<4> a) { return vfloat<4>(_mm_cvtepi32_ps(a.v)); }
+// (int)floor(x) for x in int range.
+CR_SIMD_INLINE vint<4> FloorToInt(vfloat<4> x) { return vint<4>(_mm_cvttps_epi32(_mm_floor_ps(x.v))); }
 
 // Four rows of 8 floats (e.g. RayRecords) transposed: out[j] lane l = rows[l][j].
 CR_SIMD_INLINE void LoadTransposed(const float* const rows[4], vfloat<4> out[8])
@@ -134,6 +142,20 @@ CR_SIMD_INLINE void LoadTransposed(const float* const rows[4], vfloat<4> out[8])
     out[4 * h + 2] = vfloat<4>(c);
     out[4 * h + 3] = vfloat<4>(d);
   }
+}
+
+// Four rows of 4 floats transposed: out[j] lane l = rows[l][j] (gathers four
+// 16-byte records, e.g. Sphere, or a vertex row of Triangle, into
+// structure-of-arrays form).
+CR_SIMD_INLINE void LoadTransposed4(const float* const rows[4], vfloat<4> out[4])
+{
+  __m128 a = _mm_loadu_ps(rows[0]), b = _mm_loadu_ps(rows[1]);
+  __m128 c = _mm_loadu_ps(rows[2]), d = _mm_loadu_ps(rows[3]);
+  _MM_TRANSPOSE4_PS(a, b, c, d);
+  out[0] = vfloat<4>(a);
+  out[1] = vfloat<4>(b);
+  out[2] = vfloat<4>(c);
+  out[3] = vfloat<4>(d);
 }
 
 // Per-lane choice among the x, y, z of one point: ComponentSelector turns a

@@ -115,6 +115,17 @@ CR_SIMD_INLINE vint<8> Select(vbool<8> m, vint<8> a, vint<8> b)
 {
   return vint<8>(_mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b.v), _mm256_castsi256_ps(a.v), m.m)));
 }
+CR_SIMD_INLINE vint<8> operator-(vint<8> a, vint<8> b) { return vint<8>(_mm256_sub_epi32(a.v, b.v)); }
+CR_SIMD_INLINE vbool<8> operator<(vint<8> a, vint<8> b)
+{
+  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(b.v, a.v)));
+}
+CR_SIMD_INLINE vbool<8> operator>(vint<8> a, vint<8> b)
+{
+  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v)));
+}
+CR_SIMD_INLINE vfloat<8> ToFloat(vint<8> a) { return vfloat<8>(_mm256_cvtepi32_ps(a.v)); }
+CR_SIMD_INLINE vint<8> FloorToInt(vfloat<8> x) { return vint<8>(_mm256_cvttps_epi32(_mm256_floor_ps(x.v))); }
 
 // Eight rows of 8 floats (e.g. RayRecords) transposed: out[j] lane l = rows[l][j].
 CR_SIMD_INLINE void LoadTransposed(const float* const rows[8], vfloat<8> out[8])
