@@ -95,52 +95,86 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
   vint<N> cell[3];
   vbool<N> live = GridPacket_Enter<N, kFast>(g, P, H, active, cell);
   if (None(live)) return;
-  const vint<N> res[3] = {vint<N>(int(g.res[0])), vint<N>(int(g.res[1])), vint<N>(int(g.res[2]))};
-  vint<N> step[3];
-  for (int a = 0; a < 3; ++a) step[a] = Select(P.invNeg[a], vint<N>(-1), vint<N>(1));
+  // Per lane and axis: the index of the exit plane, its crossing parameter,
+  // the step, the exit plane index at which the walk has left the grid, and
+  // the change of the cell index per step (cell strides 1, res x, res x res y).
+  const int stride[3] = {1, int(g.res[0]), int(g.res[0] * g.res[1])};
+  vint<N> exitPlane[3], step[3], limit[3], dIdx[3];
+  vfloat<N> tNext[3];
+  auto planeT = [&](int a, vint<N> i) { return PlaneTN<N>(GridPlaneN<N>(g, a, i), P.org[a], P.inv[a]); };
+  for (int a = 0; a < 3; ++a) {
+    const vbool<N> down = P.invNeg[a];
+    exitPlane[a] = Select(down, cell[a], cell[a] + vint<N>(1));
+    tNext[a] = planeT(a, exitPlane[a]);
+    step[a] = Select(down, vint<N>(-1), vint<N>(1));
+    limit[a] = Select(down, vint<N>(-1), vint<N>(int(g.res[a]) + 1));
+    dIdx[a] = Select(down, vint<N>(-stride[a]), vint<N>(stride[a]));
+  }
+  vint<N> idx = cell[0] + vint<N>(stride[1]) * cell[1] + vint<N>(stride[2]) * cell[2];
   const std::uint32_t* cellStart = sc.cellStart;
   const std::uint32_t* refs = sc.gridRefs;
   for (;;) {
+    const unsigned liveBits = live.Bits();
     if constexpr (kStats) {
-      st.nTS += PopCount(live.Bits());
-      st.nLeaves += PopCount(live.Bits());
+      st.nTS += PopCount(liveBits);
+      st.nLeaves += PopCount(liveBits);
     }
-    const vint<N> idx = cell[0] + res[0] * (cell[1] + res[1] * cell[2]);
+    // The crossing after one more step on each axis, computed before it is
+    // known which axis steps, so that the walk's chain of dependent
+    // operations from one cell to the next stays short.
+    vfloat<N> cand[3];
+    for (int a = 0; a < 3; ++a) cand[a] = planeT(a, exitPlane[a] + step[a]);
+    // The reference ranges of the lanes' cells; most cells are empty, and
+    // the lanes of a coherent packet often stand in one cell.
     alignas(32) std::uint32_t idxs[N];
     idx.Store(idxs);
     unsigned done = 0;  // occlusion: lanes with an occluder
-    for (unsigned pending = live.Bits(); pending;) {
-      const std::uint32_t c = idxs[LowestBit(pending)];
-      const vbool<N> m = live & (idx == vint<N>(static_cast<int>(c)));
-      pending &= ~m.Bits();
-      const std::uint32_t begin = cellStart[c], end = cellStart[c + 1];
+    const std::uint32_t c0 = idxs[LowestBit(liveBits)];
+    if ((liveBits & ~(idx == vint<N>(static_cast<int>(c0))).Bits()) == 0) {
+      const std::uint32_t begin = cellStart[c0], end = cellStart[c0 + 1];
       if (begin == end) {
-        if constexpr (kStats) st.nEmptyLeaves += PopCount(m.Bits());
-        continue;
+        if constexpr (kStats) st.nEmptyLeaves += PopCount(liveBits);
+      } else {
+        PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, live, anyHit, done, st);
       }
-      PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
+    } else {
+      const vint<N> safeIdx = Select(live, idx, vint<N>(0));  // lanes that are not live read cell 0
+      const vint<N> begin = Gather(cellStart, safeIdx), end = Gather(cellStart + 1, safeIdx);
+      const vbool<N> full = AndNot(live, begin == end);
+      if constexpr (kStats) st.nEmptyLeaves += PopCount(AndNot(live, full).Bits());
+      if (Any(full)) {
+        alignas(32) std::uint32_t begins[N], ends[N];
+        begin.Store(begins);
+        end.Store(ends);
+        // One pass over each occupied cell, for all the lanes that stand in it.
+        for (unsigned pending = full.Bits(); pending;) {
+          const int l = LowestBit(pending);
+          const vbool<N> m = full & (idx == vint<N>(static_cast<int>(idxs[l])));
+          pending &= ~m.Bits();
+          PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begins[l], ends[l], P, H, m, anyHit, done, st);
+        }
+      }
     }
     if (done) {
       live = AndNot(live, vbool<N>::FromBits(done));
       if (None(live)) return;
     }
-    // Exit face: the smallest crossing of the three exit planes (strict <,
-    // so x wins ties over y and z, as in the scalar loop).
-    vfloat<N> tExit(__builtin_inff());
-    vint<N> axis(0);
-    for (int a = 0; a < 3; ++a) {
-      const vint<N> plane = Select(P.invNeg[a], cell[a], cell[a] + vint<N>(1));
-      const vfloat<N> t = PlaneTN<N>(GridPlaneN<N>(g, a, plane), P.org[a], P.inv[a]);
-      const vbool<N> lt = t < tExit;
-      tExit = Select(lt, t, tExit);
-      axis = Select(lt, vint<N>(a), axis);
-    }
+    // Exit face: the smallest crossing; on a tie x wins over y and z, and y
+    // over z (the scalar loop's strict <). No crossing is NaN (PlaneTN).
+    const vfloat<N> t01 = Min(tNext[0], tNext[1]);
+    const vfloat<N> tExit = Min(t01, tNext[2]);
+    vbool<N> s[3];
+    s[2] = tNext[2] < t01;
+    s[1] = AndNot(tNext[1] < tNext[0], s[2]);
+    s[0] = !(s[1] | s[2]);
     live = AndNot(live, H.t <= tExit);
     if (None(live)) return;
     for (int a = 0; a < 3; ++a) {
-      const vbool<N> s = live & (axis == vint<N>(a));
-      cell[a] = cell[a] + Select(s, step[a], vint<N>(0));
-      live = AndNot(live, s & !LessUnsigned(cell[a], res[a]));
+      const vbool<N> sa = live & s[a];
+      exitPlane[a] = exitPlane[a] + Select(sa, step[a], vint<N>(0));
+      idx = idx + Select(sa, dIdx[a], vint<N>(0));
+      tNext[a] = Select(sa, cand[a], tNext[a]);
+      live = AndNot(live, sa & (exitPlane[a] == limit[a]));
     }
     if (None(live)) return;
   }

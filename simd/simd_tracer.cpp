@@ -163,16 +163,25 @@ class SimdTracer final : public Tracer {
     } else {
       // order: the positions still to trace (all rays when empty).
       std::vector<std::uint32_t> order;
+      const bool mayPack = variant_ != Variant::Single;
+      const bool octree = config_.accel == AccelKind::Octree;
+      const bool coherent = (variant_ == Variant::Auto || (mayPack && octree)) &&
+                            SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction;
+      // Octree packets of an incoherent set are formed per direction class
+      // (DirectionClassOrder says why), the pilot's included.
+      std::vector<std::uint32_t> classOrder;
+      if (mayPack && octree && !coherent) classOrder = DirectionClassOrder(rays);
       if (variant_ == Variant::Packet)
         usedPacket_ = true;
       else if (variant_ == Variant::Single)
         usedPacket_ = false;
-      else if (SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction)
+      else if (coherent)
         usedPacket_ = true;
       else if (rays.size() < kPilotMinRays)
         usedPacket_ = false;
       else
-        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, order);
+        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, classOrder, order);
+      if (usedPacket_ && order.empty() && !classOrder.empty()) order = std::move(classOrder);
       std::uint32_t imageWidth = 0;
       if (usedPacket_ && order.empty()) {
         // Packets of primary rays cover compact image tiles (4x2 or 2x2
@@ -266,20 +275,26 @@ class SimdTracer final : public Tracer {
   // on random rays packets win on balls and tree, single rays on gears and
   // teapot), so no ray-set statistic predicts it as well.
   bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, KernelStats* sum,
-             std::vector<std::uint32_t>& rest) const
+             const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
   {
-    const std::size_t nBlocks = rays.size() / kPilotBlock;
-    const std::size_t nPilot = std::min<std::size_t>(2 * kPilotBlocksEach, nBlocks);
-    const std::size_t stride = nBlocks / nPilot;
+    // seq: the positions in the order to trace them (the rays themselves when empty).
+    const std::size_t n = seq.empty() ? rays.size() : seq.size();
+    const std::size_t nBlocks = n / kPilotBlock;
+    // Pairs of adjacent blocks (one packet, one single: rays of the same kind
+    // and, in a class order, of the same class) spread over the sequence.
+    const std::size_t nPairs = std::min<std::size_t>(kPilotBlocksEach, nBlocks / 2);
+    const std::size_t nPilot = 2 * nPairs;
+    const std::size_t stride = nBlocks / nPairs;
     std::vector<char> isPilot(nBlocks, 0);
     double seconds[2] = {0.0, 0.0};
     KernelStats pilotStats;
     for (std::size_t i = 0; i < nPilot; ++i) {
-      const std::size_t b = i * stride;
+      const std::size_t b = (i / 2) * stride + (i & 1);
       isPilot[b] = 1;
       KernelJob job;
       job.rays = rays.data();
       job.hits = hits.data();
+      job.order = seq.empty() ? nullptr : seq.data();
       job.begin = b * kPilotBlock;
       job.end = job.begin + kPilotBlock;
       job.occlusion = occlusion ? 1 : 0;
@@ -291,9 +306,10 @@ class SimdTracer final : public Tracer {
     }
     if (sum) Add(*sum, pilotStats);
     rest.clear();
-    rest.reserve(rays.size() - nPilot * kPilotBlock);
-    for (std::size_t r = 0; r < rays.size(); ++r)
-      if (r / kPilotBlock >= nBlocks || !isPilot[r / kPilotBlock]) rest.push_back(static_cast<std::uint32_t>(r));
+    rest.reserve(n - nPilot * kPilotBlock);
+    for (std::size_t p = 0; p < n; ++p)
+      if (p / kPilotBlock >= nBlocks || !isPilot[p / kPilotBlock])
+        rest.push_back(seq.empty() ? static_cast<std::uint32_t>(p) : seq[p]);
     return seconds[0] <= seconds[1];
   }
 };

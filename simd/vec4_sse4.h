@@ -125,6 +125,12 @@ CR_SIMD_INLINE vint<4> operator-(vint<4> a, vint<4> b) { return vint<4>(_mm_sub_
 // Signed comparisons.
 CR_SIMD_INLINE vbool<4> operator<(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmplt_epi32(a.v, b.v))); }
 CR_SIMD_INLINE vbool<4> operator>(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmpgt_epi32(a.v, b.v))); }
+// base[idx] per lane (idx >= 0).
+CR_SIMD_INLINE vint<4> Gather(const std::uint32_t* base, vint<4> idx)
+{
+  return vint<4>(_mm_setr_epi32(int(base[_mm_extract_epi32(idx.v, 0)]), int(base[_mm_extract_epi32(idx.v, 1)]),
+                                int(base[_mm_extract_epi32(idx.v, 2)]), int(base[_mm_extract_epi32(idx.v, 3)])));
+}
 // (float)i, exact below 2^24 (cell and plane indices).
 CR_SIMD_INLINE vfloat<4> ToFloat(vint<4> a) { return vfloat<4>(_mm_cvtepi32_ps(a.v)); }
 // (int)floor(x) for x in int range.

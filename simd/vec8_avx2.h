@@ -124,6 +124,14 @@ CR_SIMD_INLINE vbool<8> operator>(vint<8> a, vint<8> b)
 {
   return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v)));
 }
+// base[idx] per lane (idx >= 0).
+CR_SIMD_INLINE vint<8> Gather(const std::uint32_t* base, vint<8> idx)
+{
+  alignas(32) std::uint32_t i[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(i), idx.v);
+  return vint<8>(_mm256_setr_epi32(int(base[i[0]]), int(base[i[1]]), int(base[i[2]]), int(base[i[3]]), int(base[i[4]]),
+                                   int(base[i[5]]), int(base[i[6]]), int(base[i[7]])));
+}
 CR_SIMD_INLINE vfloat<8> ToFloat(vint<8> a) { return vfloat<8>(_mm256_cvtepi32_ps(a.v)); }
 CR_SIMD_INLINE vint<8> FloorToInt(vfloat<8> x) { return vint<8>(_mm256_cvttps_epi32(_mm256_floor_ps(x.v))); }
 
