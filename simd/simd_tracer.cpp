@@ -164,7 +164,7 @@ class SimdTracer final : public Tracer {
       // order: the positions still to trace (all rays when empty).
       std::vector<std::uint32_t> order;
       const bool mayPack = variant_ != Variant::Single;
-      const bool octree = config_.accel == AccelKind::Octree;
+      const bool octree = config_.accel != AccelKind::BVH;
       const bool coherent = (variant_ == Variant::Auto || (mayPack && octree)) &&
                             SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction;
       // Octree packets of an incoherent set are formed per direction class

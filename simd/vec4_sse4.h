@@ -125,12 +125,21 @@ CR_SIMD_INLINE vint<4> operator-(vint<4> a, vint<4> b) { return vint<4>(_mm_sub_
 // Signed comparisons.
 CR_SIMD_INLINE vbool<4> operator<(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmplt_epi32(a.v, b.v))); }
 CR_SIMD_INLINE vbool<4> operator>(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmpgt_epi32(a.v, b.v))); }
-// base[idx] per lane (idx >= 0).
-CR_SIMD_INLINE vint<4> Gather(const std::uint32_t* base, vint<4> idx)
+// lo = base[idx], hi = base[idx + 1] per lane (idx >= 0): one 8-byte load per lane.
+CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<4> idx, vint<4>& lo, vint<4>& hi)
 {
-  return vint<4>(_mm_setr_epi32(int(base[_mm_extract_epi32(idx.v, 0)]), int(base[_mm_extract_epi32(idx.v, 1)]),
-                                int(base[_mm_extract_epi32(idx.v, 2)]), int(base[_mm_extract_epi32(idx.v, 3)])));
+  alignas(16) std::uint32_t i[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(i), idx.v);
+  auto pair = [&](int a, int b) {
+    const __m128d q = _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + i[a])));
+    return _mm_castpd_ps(_mm_loadh_pd(q, reinterpret_cast<const double*>(base + i[b])));
+  };
+  const __m128 q0 = pair(0, 1), q1 = pair(2, 3);  // lo hi lo hi
+  lo = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(2, 0, 2, 0))));
+  hi = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(3, 1, 3, 1))));
 }
+// m ? a : 0, lane by lane.
+CR_SIMD_INLINE vint<4> MaskedOrZero(vbool<4> m, vint<4> a) { return vint<4>(_mm_and_si128(_mm_castps_si128(m.m), a.v)); }
 // (float)i, exact below 2^24 (cell and plane indices).
 CR_SIMD_INLINE vfloat<4> ToFloat(vint<4> a) { return vfloat<4>(_mm_cvtepi32_ps(a.v)); }
 // (int)floor(x) for x in int range.
