@@ -83,38 +83,39 @@ CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& 
   const GridHeader& g = *sc.grid;
   PackRay<4> pr;
   PackRay_Init<4>(pr, ray);
-  int cell[3], step[3], res[3];
-  float tNext[3];  // crossing of each axis's exit plane
+  // Per axis: cell coordinate, step, exit plane crossing, and the change of
+  // the cell index per step (strides 1, res x, res x res y).
+  int cell[3], step[3], res[3], dIdx[3];
+  float tNext[3];
+  const int stride[3] = {1, int(g.res[0]), int(g.res[0] * g.res[1])};
   for (int a = 0; a < 3; ++a) {
     cell[a] = first[a];
     res[a] = static_cast<int>(g.res[a]);
     step[a] = ray.inv[a] < 0.0f ? -1 : 1;
+    dIdx[a] = step[a] * stride[a];
     tNext[a] = PlaneT(GridPlane(g, a, step[a] > 0 ? cell[a] + 1 : cell[a]), ray.org[a], ray.inv[a]);
   }
+  std::uint32_t idx = std::uint32_t(cell[0] + stride[1] * cell[1] + stride[2] * cell[2]);
   for (;;) {
     if constexpr (kStats) {
       ++st.nTS;
       ++st.nLeaves;
     }
-    const std::uint32_t idx =
-        std::uint32_t(cell[0]) + g.res[0] * (std::uint32_t(cell[1]) + g.res[1] * std::uint32_t(cell[2]));
     const std::uint32_t begin = sc.cellStart[idx], end = sc.cellStart[idx + 1];
     if (begin == end) {
       if constexpr (kStats) ++st.nEmptyLeaves;
     } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.gridRefs, begin, end, pr, hit, anyHit, st) && anyHit) {
       return;
     }
-    int axis = 0;
-    float tExit = __builtin_inff();
-    for (int a = 0; a < 3; ++a) {
-      if (tNext[a] < tExit) {
-        tExit = tNext[a];
-        axis = a;
-      }
-    }
-    if (hit.t <= tExit) return;
+    // Exit face: the smallest crossing, x before y before z on ties (the
+    // scalar loop's strict <; no crossing is NaN), chosen without branches,
+    // which incoherent rays would mispredict.
+    const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
+    const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
+    if (hit.t <= tNext[axis]) return;
     cell[axis] += step[axis];
-    if (cell[axis] < 0 || cell[axis] >= res[axis]) return;
+    if (static_cast<unsigned>(cell[axis]) >= static_cast<unsigned>(res[axis])) return;
+    idx += static_cast<std::uint32_t>(dIdx[axis]);
     tNext[axis] =
         PlaneT(GridPlane(g, axis, step[axis] > 0 ? cell[axis] + 1 : cell[axis]), ray.org[axis], ray.inv[axis]);
   }

@@ -14,10 +14,12 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
-// fmaxf / fminf of C (glibc x86-64: maxss / minss, the other operand when one
-// is NaN), as the vector FMax / FMin.
-CR_SIMD_INLINE float FMaxS(float a, float b) { return b != b ? a : (a > b ? a : b); }
-CR_SIMD_INLINE float FMinS(float a, float b) { return b != b ? a : (a < b ? a : b); }
+// fmaxf / fminf of C where neither operand is NaN (glibc x86-64: maxss /
+// minss, which return b on a tie, as the vector FMax / FMin). No parameter
+// is NaN: Ray_PlaneT maps NaN to 0, and tmin and the hit distance are
+// numbers.
+CR_SIMD_INLINE float FMaxS(float a, float b) { return a > b ? a : b; }
+CR_SIMD_INLINE float FMinS(float a, float b) { return a < b ? a : b; }
 
 // Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
 template <unsigned kTypes, bool kFast, bool kStats>
