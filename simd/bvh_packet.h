@@ -114,57 +114,50 @@ CR_SIMD_INLINE vbool<N> PacketBox_Intersect(const BVHNode& node, const RayPacket
   return Box_IntersectRays<kFast, N>(node.bmin, node.bmax, P.org, P.inv, P.invNeg, P.tmin, tmax, tEnter);
 }
 
-// Primitive g against the lanes of m; keeps each lane's closer hit
-// (Hit_Closer). Returns the lanes whose hit changed.
-template <int N, unsigned kTypes, bool kFast>
-CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
-                                             HitPacket<N>& H, vbool<N> m)
+// Primitive g, known to be of type kType, against the lanes of m; keeps each
+// lane's closer hit (Hit_Closer). Returns the lanes whose hit changed.
+template <int N, PrimType kType, bool kFast>
+CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
+                                               HitPacket<N>& H, vbool<N> m)
 {
   vfloat<N> t, u(0.0f), v(0.0f);
   vbool<N> ok;
   const PrimCounts& c = sc.counts;
-  switch (TypeOf<kTypes>(g, c)) {
-    case PrimType::Sphere: {
-      const Sphere& sp = sc.spheres[g];
-      vfloat<N> f[3];
-      for (int i = 0; i < 3; ++i) f[i] = P.org[i] - vfloat<N>(sp.center[i]);
-      ok = Sphere_IntersectN<kFast, N>(f, P.dir, vfloat<N>(sp.radius), P.tmin, H.t, t);
-      break;
-    }
-    case PrimType::Triangle: {
-      const Triangle& tri = sc.triangles[g - c.nSpheres];
-      if constexpr (kFast) {
-        vfloat<N> v0[3], v1[3], v2[3];
-        for (int i = 0; i < 3; ++i) {
-          v0[i] = vfloat<N>(tri.v0[i]);
-          v1[i] = vfloat<N>(tri.v1[i]);
-          v2[i] = vfloat<N>(tri.v2[i]);
-        }
-        ok = Triangle_MollerTrumboreN<N>(v0, v1, v2, P.org, P.dir, P.tmin, H.t, t, u, v);
-      } else {
-        vfloat<N> A[3], B[3], C[3], w0[3], w1[3], w2[3];
-        for (int j = 0; j < 3; ++j) {
-          A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
-          B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
-          C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
-          w0[j] = vfloat<N>(tri.v0[j]);
-          w1[j] = vfloat<N>(tri.v1[j]);
-          w2[j] = vfloat<N>(tri.v2[j]);
-        }
-        ok = Triangle_WatertightN<N>(A, B, C, P.s, w0, w1, w2, P.org, P.dir, P.tmin, H.t, t, u, v);
-      }
-      break;
-    }
-    case PrimType::Cone: {
-      const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];
-      vfloat<N> dl[3], w[3];
+  if constexpr (kType == PrimType::Sphere) {
+    const Sphere& sp = sc.spheres[g];
+    vfloat<N> f[3];
+    for (int i = 0; i < 3; ++i) f[i] = P.org[i] - vfloat<N>(sp.center[i]);
+    ok = Sphere_IntersectN<kFast, N>(f, P.dir, vfloat<N>(sp.radius), P.tmin, H.t, t);
+  } else if constexpr (kType == PrimType::Triangle) {
+    const Triangle& tri = sc.triangles[g - c.nSpheres];
+    if constexpr (kFast) {
+      vfloat<N> v0[3], v1[3], v2[3];
       for (int i = 0; i < 3; ++i) {
-        dl[i] = P.org[i] - vfloat<N>(cd.base[i]);
-        w[i] = vfloat<N>(cd.w[i]);
+        v0[i] = vfloat<N>(tri.v0[i]);
+        v1[i] = vfloat<N>(tri.v1[i]);
+        v2[i] = vfloat<N>(tri.v2[i]);
       }
-      ok = Cone_IntersectN<kFast, N>(dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin, H.t, t);
-      break;
+      ok = Triangle_MollerTrumboreN<N>(v0, v1, v2, P.org, P.dir, P.tmin, H.t, t, u, v);
+    } else {
+      vfloat<N> A[3], B[3], C[3], w0[3], w1[3], w2[3];
+      for (int j = 0; j < 3; ++j) {
+        A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
+        B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
+        C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
+        w0[j] = vfloat<N>(tri.v0[j]);
+        w1[j] = vfloat<N>(tri.v1[j]);
+        w2[j] = vfloat<N>(tri.v2[j]);
+      }
+      ok = Triangle_WatertightN<N>(A, B, C, P.s, w0, w1, w2, P.org, P.dir, P.tmin, H.t, t, u, v);
     }
+  } else {
+    const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];
+    vfloat<N> dl[3], w[3];
+    for (int i = 0; i < 3; ++i) {
+      dl[i] = P.org[i] - vfloat<N>(cd.base[i]);
+      w[i] = vfloat<N>(cd.w[i]);
+    }
+    ok = Cone_IntersectN<kFast, N>(dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin, H.t, t);
   }
   const vint<N> gv(static_cast<int>(g));
   const vbool<N> closer = m & ok & ((t < H.t) | ((t == H.t) & LessUnsigned(gv, H.g)));
@@ -174,6 +167,19 @@ CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_
   H.v = Select(closer, v, H.v);
   H.g = Select(closer, gv, H.g);
   return closer;
+}
+
+// Primitive g of any type in kTypes against the lanes of m (as above).
+template <int N, unsigned kTypes, bool kFast>
+CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
+                                             HitPacket<N>& H, vbool<N> m)
+{
+  switch (TypeOf<kTypes>(g, sc.counts)) {
+    case PrimType::Sphere: return PacketPrim_IntersectAs<N, PrimType::Sphere, kFast>(sc, g, P, H, m);
+    case PrimType::Triangle: return PacketPrim_IntersectAs<N, PrimType::Triangle, kFast>(sc, g, P, H, m);
+    case PrimType::Cone: break;
+  }
+  return PacketPrim_IntersectAs<N, PrimType::Cone, kFast>(sc, g, P, H, m);
 }
 
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.
@@ -265,45 +271,62 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
   }
 }
 
-// Traces positions [job.begin, job.end) in packets of N consecutive positions.
+// The packet of positions p .. p + count - 1 (image tiles when the job says
+// so), tiles of (N/2) x 2 pixels or consecutive
+// positions, see KernelJob.
+template <int N>
+CR_SIMD_INLINE int Packet_Rays(const KernelJob& job, std::size_t p, const RayRecord* recs[N], std::uint32_t idx[N])
+{
+  const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+  if (job.imageWidth && !job.order) {
+    constexpr std::size_t tw = N / 2;
+    const std::size_t w = job.imageWidth, tilesPerRow = w / tw, tile = p / N;
+    const std::size_t base = (tile / tilesPerRow) * 2 * w + (tile % tilesPerRow) * tw;
+    for (int l = 0; l < count; ++l) idx[l] = static_cast<std::uint32_t>(base + std::size_t(l / tw) * w + l % tw);
+  } else {
+    for (int l = 0; l < count; ++l) idx[l] = RayIndex(job, p + std::size_t(l));
+  }
+  for (int l = 0; l < count; ++l) recs[l] = &job.rays[idx[l]];
+  for (int l = count; l < N; ++l) recs[l] = recs[0];
+  return count;
+}
+
+// Writes the hits of the first `count` lanes.
+template <int N>
+CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, const KernelJob& job,
+                                     const HitPacket<N>& H, const std::uint32_t idx[N], int count)
+{
+  alignas(32) float t[N], u[N], v[N];
+  alignas(32) std::uint32_t g[N];
+  H.t.Store(t);
+  H.u.Store(u);
+  H.v.Store(v);
+  H.g.Store(g);
+  for (int l = 0; l < count; ++l) {
+    Hit h;
+    h.t = t[l];
+    h.u = u[l];
+    h.v = v[l];
+    h.g = g[l];
+    job.hits[idx[l]] = Hit_ToRecord(&h, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+  }
+}
+
+// Traces positions [job.begin, job.end) in packets of N.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   const PrimView pv = MakePrimView(sc);
   StatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
-    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
     const RayRecord* recs[N];
     std::uint32_t idx[N];
-    if (job.imageWidth && !job.order) {
-      constexpr std::size_t tw = N / 2;
-      const std::size_t w = job.imageWidth, tilesPerRow = w / tw, tile = p / N;
-      const std::size_t base = (tile / tilesPerRow) * 2 * w + (tile % tilesPerRow) * tw;
-      for (int l = 0; l < count; ++l) idx[l] = static_cast<std::uint32_t>(base + std::size_t(l / tw) * w + l % tw);
-    } else {
-      for (int l = 0; l < count; ++l) idx[l] = RayIndex(job, p + std::size_t(l));
-    }
-    for (int l = 0; l < count; ++l) recs[l] = &job.rays[idx[l]];
-    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    const int count = Packet_Rays<N>(job, p, recs, idx);
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
-    const vbool<N> active = vbool<N>::FromBits((1u << count) - 1u);
-    BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, active, job.occlusion, st);
-    alignas(32) float t[N], u[N], v[N];
-    alignas(32) std::uint32_t g[N];
-    H.t.Store(t);
-    H.u.Store(u);
-    H.v.Store(v);
-    H.g.Store(g);
-    for (int l = 0; l < count; ++l) {
-      Hit h;
-      h.t = t[l];
-      h.u = u[l];
-      h.v = v[l];
-      h.g = g[l];
-      job.hits[idx[l]] = Hit_ToRecord(&h, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
-    }
+    BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
+    Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }
   if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
 }

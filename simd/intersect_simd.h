@@ -130,6 +130,11 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
     const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
     const vfloat<N> disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
     miss = disc < vfloat<N>(0.0f);
+    // Most tests miss here: skip the square root and divisions when all do.
+    if (All(miss)) {
+      tHit = vfloat<N>(0.0f);
+      return vbool<N>(false);
+    }
     Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1);
   }
   const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
@@ -194,6 +199,11 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
   const vfloat<N> det = U + V + W;
   miss = miss | (det == zero);
+  // Most tests miss here: skip the division when all do.
+  if (All(miss)) {
+    tHit = uHit = vHit = zero;
+    return vbool<N>(false);
+  }
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
   // axis order, which the sums' rounding depends on).
   const vfloat<N> t = Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
@@ -282,6 +292,11 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
     const vfloat<N> disc = Dot3N<N>(e, e) - Dot3N<N>(x, x);
     quadMiss = disc < zero;
+    // Skip the square root and divisions when every lane misses already.
+    if (All(miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear))) {
+      tHit = zero;
+      return vbool<N>(false);
+    }
     Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1);
   }
   t0 = Select(linear, tLin, t0);

@@ -70,9 +70,55 @@ inline void AddStats(KernelStats* out, const StatsSum& s, std::size_t rays)
   out->nEmptyLeaves += s.nEmptyLeaves;
 }
 
+// Ray_PlaneT of kernels/ray.h: (p - org) * inv, and 0 where that is NaN (a
+// ray lying in the plane).
+CR_SIMD_INLINE float PlaneT(float p, float org, float inv)
+{
+  const float t = (p - org) * inv;
+  return t != t ? 0.0f : t;
+}
+template <int N>
+CR_SIMD_INLINE vfloat<N> PlaneTN(vfloat<N> p, vfloat<N> org, vfloat<N> inv)
+{
+  const vfloat<N> t = (p - org) * inv;
+  return Select(IsNaN(t), vfloat<N>(0.0f), t);
+}
+
 inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
 {
   return job.order ? job.order[p] : static_cast<std::uint32_t>(p);
+}
+
+// Kernel selection: pick(TypesTag<kTypes>{}, FlagsTag<kFast, kStats>{})
+// instantiated for the type set and flags of the key, so each kernel is
+// compiled for exactly the primitive types a scene has.
+template <unsigned kTypes>
+struct TypesTag {
+  static constexpr unsigned kValue = kTypes;
+};
+template <bool kFast, bool kStats>
+struct FlagsTag {
+  static constexpr bool kFastValue = kFast, kStatsValue = kStats;
+};
+template <class Pick, unsigned kTypes>
+KernelFn SelectFlags(const KernelKey& key, Pick pick)
+{
+  if (key.fast) return key.stats ? pick(TypesTag<kTypes>{}, FlagsTag<true, true>{}) : pick(TypesTag<kTypes>{}, FlagsTag<true, false>{});
+  return key.stats ? pick(TypesTag<kTypes>{}, FlagsTag<false, true>{}) : pick(TypesTag<kTypes>{}, FlagsTag<false, false>{});
+}
+template <class Pick>
+KernelFn SelectKernel(const KernelKey& key, Pick pick)
+{
+  switch (key.types) {
+    case 1: return SelectFlags<Pick, 1>(key, pick);
+    case 2: return SelectFlags<Pick, 2>(key, pick);
+    case 3: return SelectFlags<Pick, 3>(key, pick);
+    case 4: return SelectFlags<Pick, 4>(key, pick);
+    case 5: return SelectFlags<Pick, 5>(key, pick);
+    case 6: return SelectFlags<Pick, 6>(key, pick);
+    case 7: return SelectFlags<Pick, 7>(key, pick);
+  }
+  return nullptr;  // no primitives: the tracer answers misses itself
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

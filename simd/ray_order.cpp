@@ -68,4 +68,24 @@ std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tile
   return order;
 }
 
+std::vector<std::uint32_t> DirectionClassOrder(const std::vector<RayRecord>& rays)
+{
+  constexpr int kClasses = 24;
+  const std::size_t n = rays.size();
+  std::vector<std::uint8_t> cls(n);
+  std::size_t count[kClasses + 1] = {};
+  for (std::size_t i = 0; i < n; ++i) {
+    const float* d = rays[i].dir;
+    const float ax = std::fabs(d[0]), ay = std::fabs(d[1]), az = std::fabs(d[2]);
+    const int dom = ax >= ay ? (ax >= az ? 0 : 2) : (ay >= az ? 1 : 2);
+    const int signs = int(std::signbit(d[0])) | int(std::signbit(d[1])) << 1 | int(std::signbit(d[2])) << 2;
+    cls[i] = static_cast<std::uint8_t>(3 * signs + dom);
+    ++count[cls[i] + 1];
+  }
+  for (int c = 0; c < kClasses; ++c) count[c + 1] += count[c];
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[count[cls[i]]++] = static_cast<std::uint32_t>(i);
+  return order;
+}
+
 }  // namespace cr::simd

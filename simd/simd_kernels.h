@@ -17,11 +17,22 @@ namespace cr::simd {
 // Primitive types present in a scene; traversals are instantiated per set.
 enum PrimTypeBits : unsigned { kSphereBit = 1u, kTriangleBit = 2u, kConeBit = 4u };
 
+// The structure a kernel walks.
+enum class KernelAccel { BVH, Grid, Octree };
+
 // Everything a kernel reads, as raw pointers into arrays the tracer owns.
 struct KernelScene {
   // Binary BVH (packet path), kernels/types.h layout.
   const BVHNode* nodes = nullptr;
   const std::uint32_t* refs = nullptr;
+  // Uniform grid (GridHeader, nCells + 1 cell offsets, references).
+  const GridHeader* grid = nullptr;
+  const std::uint32_t* cellStart = nullptr;
+  const std::uint32_t* gridRefs = nullptr;
+  // Octree (OctreeHeader, nodes, references).
+  const OctreeHeader* octree = nullptr;
+  const OctreeNode* octreeNodes = nullptr;
+  const std::uint32_t* octreeRefs = nullptr;
   // N-wide BVH (single-ray path) of the ISA's width, and its K-wide leaf packs.
   const void* wideNodes = nullptr;  // WideNode<N>
   const WideLeaf* wideLeaves = nullptr;
@@ -63,6 +74,7 @@ struct KernelJob {
 using KernelFn = void (*)(const KernelScene&, const KernelJob&);
 
 struct KernelKey {
+  KernelAccel accel = KernelAccel::BVH;
   unsigned types = 0;   // PrimTypeBits, 1..7
   bool fast = false;    // Precision::Fast (else robust)
   bool stats = false;   // counts Havran's measures
@@ -92,10 +104,15 @@ struct KernelProbes {
 
 // Each ISA's kernels: Probes() also tells its widths (SSE4: N = 4, K = 4;
 // AVX2: N = 8, K = 4), from which the tracer builds the matching wide BVH.
+// SelectPacketKernel and SelectSingleKernel are the BVH's; SelectGridKernel
+// and SelectOctreeKernel give either variant (key.packet). nullptr when the
+// scene has no primitives.
 #define CR_DECLARE_SIMD_ISA(ns)                      \
   namespace ns {                                     \
   KernelFn SelectPacketKernel(const KernelKey& key); \
   KernelFn SelectSingleKernel(const KernelKey& key); \
+  KernelFn SelectGridKernel(const KernelKey& key);   \
+  KernelFn SelectOctreeKernel(const KernelKey& key); \
   KernelProbes Probes();                             \
   }
 CR_DECLARE_SIMD_ISA(sse4)

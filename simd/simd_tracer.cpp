@@ -1,15 +1,17 @@
-// The `simd` backend: BVH traversal with explicit SSE4.1 / AVX2 kernels,
-// chosen at run time (simd/isa.h), parallel over rays with oneTBB.
+// The `simd` backend: BVH, grid and octree traversals with explicit SSE4.1 /
+// AVX2 kernels, chosen at run time (simd/isa.h), parallel over rays with
+// oneTBB.
 //
-// Variants: `packet` (N coherent rays walk the binary BVH together,
-// simd/bvh_packet.h), `single` (one ray through the N-wide BVH,
-// simd/bvh_single.h), `auto` (packets when the ray set looks coherent,
+// Variants: `packet` (N coherent rays walk the structure together:
+// simd/bvh_packet.h, grid_packet.h, octree_packet.h), `single` (one ray at a
+// time with SIMD inside its work: the N-wide BVH of simd/bvh_single.h, the
+// grid and octree walks of grid_single.h and octree_single.h with primitives
+// tested 4 at a time), `auto` (packets when the ray set looks coherent,
 // simd/ray_coherence.h, else whichever a short pilot finds faster; see
 // docs/SIMD.md for the measurements behind it).
 // What this backend does not implement is delegated to the scalar backend
 // (the kernels of kernels/ compiled as C++), and VariantName says so:
-// --isa scalar, --precision fp64, and the grid and octree structures (until
-// their SIMD traversals land).
+// --isa scalar and --precision fp64.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -58,18 +60,44 @@ constexpr double kAutoPacketFraction = 0.5;
 constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
 
 struct IsaEntry {
-  KernelFn (*packet)(const KernelKey&);
-  KernelFn (*single)(const KernelKey&);
+  KernelFn (*packet)(const KernelKey&);  // BVH
+  KernelFn (*single)(const KernelKey&);  // BVH
+  KernelFn (*grid)(const KernelKey&);    // both variants
+  KernelFn (*octree)(const KernelKey&);  // both variants
   KernelProbes (*probes)();
+
+  KernelFn Select(const KernelKey& key) const
+  {
+    switch (key.accel) {
+      case KernelAccel::Grid: return grid(key);
+      case KernelAccel::Octree: return octree(key);
+      case KernelAccel::BVH: break;
+    }
+    return key.packet ? packet(key) : single(key);
+  }
 };
 
 IsaEntry EntryOf(Isa isa)
 {
 #if defined(CELLRAY_SIMD_X86)
-  if (isa == Isa::Avx2) return {&avx2::SelectPacketKernel, &avx2::SelectSingleKernel, &avx2::Probes};
-  if (isa == Isa::Sse4) return {&sse4::SelectPacketKernel, &sse4::SelectSingleKernel, &sse4::Probes};
+  if (isa == Isa::Avx2)
+    return {&avx2::SelectPacketKernel, &avx2::SelectSingleKernel, &avx2::SelectGridKernel, &avx2::SelectOctreeKernel,
+            &avx2::Probes};
+  if (isa == Isa::Sse4)
+    return {&sse4::SelectPacketKernel, &sse4::SelectSingleKernel, &sse4::SelectGridKernel, &sse4::SelectOctreeKernel,
+            &sse4::Probes};
 #endif
   throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
+}
+
+KernelAccel KernelAccelOf(AccelKind k)
+{
+  switch (k) {
+    case AccelKind::Grid: return KernelAccel::Grid;
+    case AccelKind::Octree: return KernelAccel::Octree;
+    case AccelKind::BVH: break;
+  }
+  return KernelAccel::BVH;
 }
 
 class SimdTracer final : public Tracer {
@@ -84,7 +112,7 @@ class SimdTracer final : public Tracer {
     width_ = probes.width;
     cones_ = MakeConeData(scene);
     const auto t0 = std::chrono::steady_clock::now();
-    if (variant_ != Variant::Packet) {
+    if (variant_ != Variant::Packet && cfg.accel == AccelKind::BVH) {
       wide_ = BuildWideBVH(data_.bvh, scene, cones_, probes.width, probes.packWidth);
       info_.bytes += wide_->Bytes();
       info_.params += fmt::format(" simd=bvh{}x{} wide_nodes={} wide_bytes={}", probes.width, probes.packWidth,
@@ -95,6 +123,12 @@ class SimdTracer final : public Tracer {
 
     sc_.nodes = data_.bvh.nodes.data();
     sc_.refs = data_.bvh.refs.data();
+    sc_.grid = &data_.grid.header;
+    sc_.cellStart = data_.grid.cellStart.data();
+    sc_.gridRefs = data_.grid.refs.data();
+    sc_.octree = &data_.octree.header;
+    sc_.octreeNodes = data_.octree.nodes.data();
+    sc_.octreeRefs = data_.octree.refs.data();
     if (wide_) wide_->Bind(sc_);
     sc_.spheres = scene.spheres.data();
     sc_.triangles = scene.triangles.data();
@@ -104,14 +138,15 @@ class SimdTracer final : public Tracer {
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
 
     KernelKey key;
+    key.accel = KernelAccelOf(cfg.accel);
     key.types = (scene.spheres.empty() ? 0u : kSphereBit) | (scene.triangles.empty() ? 0u : kTriangleBit) |
                 (scene.cones.empty() ? 0u : kConeBit);
     key.fast = cfg.precision == Precision::Fast;
     key.stats = cfg.stats;
     key.packet = true;
-    packetFn_ = e.packet(key);
+    packetFn_ = e.Select(key);
     key.packet = false;
-    singleFn_ = e.single(key);
+    singleFn_ = e.Select(key);
   }
 
   void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
@@ -128,16 +163,25 @@ class SimdTracer final : public Tracer {
     } else {
       // order: the positions still to trace (all rays when empty).
       std::vector<std::uint32_t> order;
+      const bool mayPack = variant_ != Variant::Single;
+      const bool octree = config_.accel != AccelKind::BVH;
+      const bool coherent = (variant_ == Variant::Auto || (mayPack && octree)) &&
+                            SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction;
+      // Octree packets of an incoherent set are formed per direction class
+      // (DirectionClassOrder says why), the pilot's included.
+      std::vector<std::uint32_t> classOrder;
+      if (mayPack && octree && !coherent) classOrder = DirectionClassOrder(rays);
       if (variant_ == Variant::Packet)
         usedPacket_ = true;
       else if (variant_ == Variant::Single)
         usedPacket_ = false;
-      else if (SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction)
+      else if (coherent)
         usedPacket_ = true;
       else if (rays.size() < kPilotMinRays)
         usedPacket_ = false;
       else
-        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, order);
+        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, classOrder, order);
+      if (usedPacket_ && order.empty() && !classOrder.empty()) order = std::move(classOrder);
       std::uint32_t imageWidth = 0;
       if (usedPacket_ && order.empty()) {
         // Packets of primary rays cover compact image tiles (4x2 or 2x2
@@ -231,20 +275,26 @@ class SimdTracer final : public Tracer {
   // on random rays packets win on balls and tree, single rays on gears and
   // teapot), so no ray-set statistic predicts it as well.
   bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, KernelStats* sum,
-             std::vector<std::uint32_t>& rest) const
+             const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
   {
-    const std::size_t nBlocks = rays.size() / kPilotBlock;
-    const std::size_t nPilot = std::min<std::size_t>(2 * kPilotBlocksEach, nBlocks);
-    const std::size_t stride = nBlocks / nPilot;
+    // seq: the positions in the order to trace them (the rays themselves when empty).
+    const std::size_t n = seq.empty() ? rays.size() : seq.size();
+    const std::size_t nBlocks = n / kPilotBlock;
+    // Pairs of adjacent blocks (one packet, one single: rays of the same kind
+    // and, in a class order, of the same class) spread over the sequence.
+    const std::size_t nPairs = std::min<std::size_t>(kPilotBlocksEach, nBlocks / 2);
+    const std::size_t nPilot = 2 * nPairs;
+    const std::size_t stride = nBlocks / nPairs;
     std::vector<char> isPilot(nBlocks, 0);
     double seconds[2] = {0.0, 0.0};
     KernelStats pilotStats;
     for (std::size_t i = 0; i < nPilot; ++i) {
-      const std::size_t b = i * stride;
+      const std::size_t b = (i / 2) * stride + (i & 1);
       isPilot[b] = 1;
       KernelJob job;
       job.rays = rays.data();
       job.hits = hits.data();
+      job.order = seq.empty() ? nullptr : seq.data();
       job.begin = b * kPilotBlock;
       job.end = job.begin + kPilotBlock;
       job.occlusion = occlusion ? 1 : 0;
@@ -256,9 +306,10 @@ class SimdTracer final : public Tracer {
     }
     if (sum) Add(*sum, pilotStats);
     rest.clear();
-    rest.reserve(rays.size() - nPilot * kPilotBlock);
-    for (std::size_t r = 0; r < rays.size(); ++r)
-      if (r / kPilotBlock >= nBlocks || !isPilot[r / kPilotBlock]) rest.push_back(static_cast<std::uint32_t>(r));
+    rest.reserve(n - nPilot * kPilotBlock);
+    for (std::size_t p = 0; p < n; ++p)
+      if (p / kPilotBlock >= nBlocks || !isPilot[p / kPilotBlock])
+        rest.push_back(seq.empty() ? static_cast<std::uint32_t>(p) : seq[p]);
     return seconds[0] <= seconds[1];
   }
 };
@@ -297,8 +348,6 @@ std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& 
     why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
   else if (config.precision == Precision::Fp64)
     why = "fp64 delegated";
-  else if (config.accel != AccelKind::BVH)
-    why = fmt::format("{} delegated", AccelKindName(config.accel));
   if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
   return std::make_unique<SimdTracer>(scene, config, isa, variant);
 }

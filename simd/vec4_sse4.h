@@ -121,6 +121,29 @@ CR_SIMD_INLINE vint<4> Select(vbool<4> m, vint<4> a, vint<4> b)
 {
   return vint<4>(_mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(b.v), _mm_castsi128_ps(a.v), m.m)));
 }
+CR_SIMD_INLINE vint<4> operator-(vint<4> a, vint<4> b) { return vint<4>(_mm_sub_epi32(a.v, b.v)); }
+// Signed comparisons.
+CR_SIMD_INLINE vbool<4> operator<(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmplt_epi32(a.v, b.v))); }
+CR_SIMD_INLINE vbool<4> operator>(vint<4> a, vint<4> b) { return vbool<4>(_mm_castsi128_ps(_mm_cmpgt_epi32(a.v, b.v))); }
+// lo = base[idx], hi = base[idx + 1] per lane (idx >= 0): one 8-byte load per lane.
+CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<4> idx, vint<4>& lo, vint<4>& hi)
+{
+  alignas(16) std::uint32_t i[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(i), idx.v);
+  auto pair = [&](int a, int b) {
+    const __m128d q = _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + i[a])));
+    return _mm_castpd_ps(_mm_loadh_pd(q, reinterpret_cast<const double*>(base + i[b])));
+  };
+  const __m128 q0 = pair(0, 1), q1 = pair(2, 3);  // lo hi lo hi
+  lo = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(2, 0, 2, 0))));
+  hi = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(3, 1, 3, 1))));
+}
+// m ? a : 0, lane by lane.
+CR_SIMD_INLINE vint<4> MaskedOrZero(vbool<4> m, vint<4> a) { return vint<4>(_mm_and_si128(_mm_castps_si128(m.m), a.v)); }
+// (float)i, exact below 2^24 (cell and plane indices).
+CR_SIMD_INLINE vfloat<4> ToFloat(vint<4> a) { return vfloat<4>(_mm_cvtepi32_ps(a.v)); }
+// (int)floor(x) for x in int range.
+CR_SIMD_INLINE vint<4> FloorToInt(vfloat<4> x) { return vint<4>(_mm_cvttps_epi32(_mm_floor_ps(x.v))); }
 
 // Four rows of 8 floats (e.g. RayRecords) transposed: out[j] lane l = rows[l][j].
 CR_SIMD_INLINE void LoadTransposed(const float* const rows[4], vfloat<4> out[8])
@@ -134,6 +157,20 @@ CR_SIMD_INLINE void LoadTransposed(const float* const rows[4], vfloat<4> out[8])
     out[4 * h + 2] = vfloat<4>(c);
     out[4 * h + 3] = vfloat<4>(d);
   }
+}
+
+// Four rows of 4 floats transposed: out[j] lane l = rows[l][j] (gathers four
+// 16-byte records, e.g. Sphere, or a vertex row of Triangle, into
+// structure-of-arrays form).
+CR_SIMD_INLINE void LoadTransposed4(const float* const rows[4], vfloat<4> out[4])
+{
+  __m128 a = _mm_loadu_ps(rows[0]), b = _mm_loadu_ps(rows[1]);
+  __m128 c = _mm_loadu_ps(rows[2]), d = _mm_loadu_ps(rows[3]);
+  _MM_TRANSPOSE4_PS(a, b, c, d);
+  out[0] = vfloat<4>(a);
+  out[1] = vfloat<4>(b);
+  out[2] = vfloat<4>(c);
+  out[3] = vfloat<4>(d);
 }
 
 // Per-lane choice among the x, y, z of one point: ComponentSelector turns a

@@ -115,6 +115,35 @@ CR_SIMD_INLINE vint<8> Select(vbool<8> m, vint<8> a, vint<8> b)
 {
   return vint<8>(_mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b.v), _mm256_castsi256_ps(a.v), m.m)));
 }
+CR_SIMD_INLINE vint<8> operator-(vint<8> a, vint<8> b) { return vint<8>(_mm256_sub_epi32(a.v, b.v)); }
+CR_SIMD_INLINE vbool<8> operator<(vint<8> a, vint<8> b)
+{
+  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(b.v, a.v)));
+}
+CR_SIMD_INLINE vbool<8> operator>(vint<8> a, vint<8> b)
+{
+  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v)));
+}
+// lo = base[idx], hi = base[idx + 1] per lane (idx >= 0): one 8-byte load per lane.
+CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<8> idx, vint<8>& lo, vint<8>& hi)
+{
+  alignas(32) std::uint32_t i[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(i), idx.v);
+  auto pair = [&](int a, int b) {
+    const __m128d q = _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(base + i[a])));
+    return _mm_castpd_ps(_mm_loadh_pd(q, reinterpret_cast<const double*>(base + i[b])));
+  };
+  const __m256 a = _mm256_set_m128(pair(4, 5), pair(0, 1));  // lanes 0 1 | 4 5 as lo hi pairs
+  const __m256 b = _mm256_set_m128(pair(6, 7), pair(2, 3));  // lanes 2 3 | 6 7
+  lo = vint<8>(_mm256_castps_si256(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0))));
+  hi = vint<8>(_mm256_castps_si256(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1))));
+}
+CR_SIMD_INLINE vint<8> MaskedOrZero(vbool<8> m, vint<8> a)
+{
+  return vint<8>(_mm256_and_si256(_mm256_castps_si256(m.m), a.v));
+}
+CR_SIMD_INLINE vfloat<8> ToFloat(vint<8> a) { return vfloat<8>(_mm256_cvtepi32_ps(a.v)); }
+CR_SIMD_INLINE vint<8> FloorToInt(vfloat<8> x) { return vint<8>(_mm256_cvttps_epi32(_mm256_floor_ps(x.v))); }
 
 // Eight rows of 8 floats (e.g. RayRecords) transposed: out[j] lane l = rows[l][j].
 CR_SIMD_INLINE void LoadTransposed(const float* const rows[8], vfloat<8> out[8])

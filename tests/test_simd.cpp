@@ -15,8 +15,7 @@ using namespace cr;
 
 namespace {
 
-// Structures with a SIMD traversal (grid and octree join next).
-const AccelKind kSimdAccels[] = {AccelKind::BVH};
+const AccelKind kSimdAccels[] = {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree};
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 const char* const kVariants[] = {"packet", "single"};
 
@@ -93,7 +92,7 @@ TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the referenc
     MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2; the simd backend runs its scalar fallback only");
     return;
   }
-  std::uint64_t totalTies = 0, totalOtherOccluders = 0, totalRays = 0;
+  std::uint64_t totalTies[3] = {}, totalOtherOccluders[3] = {}, totalRays[3] = {};
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : kKinds) {
@@ -122,16 +121,21 @@ TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the referenc
             CHECK(c.differentPrim == 0);
             CHECK(c.tBeyond2Ulp == 0);
             CHECK(c.occlusionDiffers == 0);
-            totalTies += c.exactTies;
-            totalOtherOccluders += c.otherOccluder;
-            totalRays += rays.size();
+            const int ai = static_cast<int>(accel);
+            totalTies[ai] += c.exactTies;
+            totalOtherOccluders[ai] += c.otherOccluder;
+            totalRays[ai] += rays.size();
           }
         }
       }
     }
   }
-  MESSAGE("simd vs scalar over ", totalRays, " rays: ", totalTies, " exact ties named another primitive, ",
-          totalOtherOccluders, " occlusion queries named another occluder");
+  for (AccelKind accel : kSimdAccels) {
+    const int ai = static_cast<int>(accel);
+    MESSAGE("simd vs scalar, ", std::string(AccelKindName(accel)), ", over ", totalRays[ai], " rays: ", totalTies[ai],
+            " exact ties named another primitive, ", totalOtherOccluders[ai],
+            " occlusion queries named another occluder");
+  }
 }
 
 TEST_CASE("simd: fast precision returns the scalar fast kernels' answers")
@@ -143,24 +147,27 @@ TEST_CASE("simd: fast precision returns the scalar fast kernels' answers")
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Random}) {
       const auto rays = test::MakeRays(scene, kind, 32);
       const bool occlusion = test::IsOcclusion(kind);
-      TraceConfig scalarCfg;
-      scalarCfg.backend = Backend::Scalar;
-      scalarCfg.precision = Precision::Fast;
-      const auto scalarHits = TraceWith(scene, scalarCfg, rays, occlusion);
-      for (const std::string& isa : isas) {
-        for (const char* variant : kVariants) {
-          TraceConfig cfg = scalarCfg;
-          cfg.backend = Backend::Simd;
-          cfg.isa = isa;
-          cfg.variant = variant;
-          std::string vn;
-          const auto hits = TraceWith(scene, cfg, rays, occlusion, &vn);
-          const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
-          INFO(name, " ", RayKindName(kind), " ", vn);
-          CHECK(vn == isa + " " + variant + " fast");
-          CHECK(c.differentPrim == 0);
-          CHECK(c.tBeyond2Ulp == 0);
-          CHECK(c.occlusionDiffers == 0);
+      for (AccelKind accel : kSimdAccels) {
+        TraceConfig scalarCfg;
+        scalarCfg.backend = Backend::Scalar;
+        scalarCfg.accel = accel;
+        scalarCfg.precision = Precision::Fast;
+        const auto scalarHits = TraceWith(scene, scalarCfg, rays, occlusion);
+        for (const std::string& isa : isas) {
+          for (const char* variant : kVariants) {
+            TraceConfig cfg = scalarCfg;
+            cfg.backend = Backend::Simd;
+            cfg.isa = isa;
+            cfg.variant = variant;
+            std::string vn;
+            const auto hits = TraceWith(scene, cfg, rays, occlusion, &vn);
+            const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
+            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", vn);
+            CHECK(vn == isa + " " + variant + " fast");
+            CHECK(c.differentPrim == 0);
+            CHECK(c.tBeyond2Ulp == 0);
+            CHECK(c.occlusionDiffers == 0);
+          }
         }
       }
     }

@@ -1,0 +1,57 @@
+// Uniform grid, one ray at a time, for incoherent rays: the 3D-DDA of
+// kernels/grid.h Grid_Trace step by step, with SIMD inside the ray's work:
+//  - rays are prepared and entered N at a time (RayPacket_Init and
+//    GridPacket_Enter: the slab test of the grid box and the branchy
+//    first-cell correction on N lanes);
+//  - a cell's primitives are tested 4 at a time, gathered from the scene
+//    arrays (simd/prim_range.h), so the grid needs no extra memory
+//    (GridSingle_Walk, simd/grid_walk.h).
+#pragma once
+
+#include "simd/bvh_single.h"
+#include "simd/grid_walk.h"
+#include "simd/kernel_common.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// Traces positions [job.begin, job.end) one ray at a time.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const PrimView pv = MakePrimView(sc);
+  const GridHeader& g = *sc.grid;
+  StatsSum st;
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    for (int l = 0; l < count; ++l) {
+      idx[l] = RayIndex(job, p + std::size_t(l));
+      recs[l] = &job.rays[idx[l]];
+    }
+    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    vint<N> cellV[3] = {vint<N>(0), vint<N>(0), vint<N>(0)};
+    unsigned in = 0;
+    if (g.nRefs != 0u) in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV).Bits();
+    alignas(32) std::uint32_t cells[3][N];
+    for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
+    Ray rays[N];
+    RayPacket_Extract<N>(P, H, rays);
+    for (int l = 0; l < count; ++l) {
+      const Ray& ray = rays[l];
+      Hit hit;
+      Hit_Init(&hit, &ray);
+      if ((in >> l) & 1u) {
+        const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
+        GridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, job.occlusion, st);
+      }
+      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    }
+  }
+  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

@@ -1,0 +1,245 @@
+// Octree, N rays at once: the Revelles-style parametric traversal of
+// kernels/octree.h (Revelles, Urena & Lastra 2000) with one shared stack of
+// nodes and per-lane parameters.
+//
+// Lanes are traversed together when their directions have the same signs
+// (the same mirroring): a packet with mixed signs is traced once per sign
+// class. Within a class every lane's walk through a node's children is a
+// chain of mirrored octants m that only grows (each step sets one bit of
+// m), so visiting the children in increasing m, each with the lanes whose
+// current child it is, gives every lane exactly its scalar sequence of
+// children. A child is entered when any of those lanes' intervals in it is
+// non-empty; a lane then follows Octree_Trace step by step:
+//  - its near, mid and far parameters come from Octree_Plane through
+//    Ray_PlaneT (shared node coordinates, per-lane rays), its first child
+//    from Octree_FirstChild, its next child from its smallest far parameter;
+//  - it stops at a child whose entry lies beyond its current hit, after a
+//    leaf or empty octant whose exit lies at or beyond the hit, or at its
+//    first hit (occlusion).
+// So hits, the order of primitive tests and the statistics (counted per
+// lane) are the scalar backend's.
+#pragma once
+
+#include "simd/bvh_packet.h"
+#include "simd/kernel_common.h"
+#include "simd/prim_range.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// Deepest octree level (CR_OCTREE_MAX_DEPTH of kernels/octree.h): interior
+// nodes lie above it, so it bounds both traversal stacks.
+inline constexpr int kOctreeMaxDepth = 20;
+
+// Octree_Plane of kernels/octree.h: rootMin + i * (rootSize * 2^-level), in float.
+CR_SIMD_INLINE float OctreePlane(const OctreeHeader& h, int axis, std::uint32_t level, std::uint32_t i)
+{
+  const float cell = h.rootSize * __builtin_bit_cast(float, (127u - level) << 23);
+  return h.rootMin[axis] + static_cast<float>(i) * cell;
+}
+
+// The state of one node on the packet's path.
+template <int N>
+struct OctreeFrame {
+  vfloat<N> t0[3], tm[3], t1[3];  // each lane's mirrored near, mid and far parameters
+  vint<N> cur;                    // each lane's current child (mirrored octant)
+  std::uint32_t node;
+  unsigned in;    // lanes still inside the node
+  unsigned desc;  // lanes that descended into child m
+  int m;          // the child being visited
+};
+
+// Octree_FirstChild per lane.
+template <int N>
+CR_SIMD_INLINE vint<N> OctreeFirstChildN(const vfloat<N> tm[3], vfloat<N> tStart)
+{
+  const vint<N> zero(0);
+  return Select(tm[0] < tStart, vint<N>(1), zero) + Select(tm[1] < tStart, vint<N>(2), zero) +
+         Select(tm[2] < tStart, vint<N>(4), zero);
+}
+
+// Moves the lanes of `lanes`, at child F.m, to their next child across the
+// exit plane of their smallest far parameter; a lane whose exit plane is the
+// node's own far plane leaves the node.
+template <int N>
+CR_SIMD_INLINE void OctreeFrame_Advance(OctreeFrame<N>& F, unsigned lanes)
+{
+  if (!lanes) return;
+  const int m = F.m;
+  const vfloat<N> fx = (m & 1) ? F.t1[0] : F.tm[0];
+  const vfloat<N> fy = (m & 2) ? F.t1[1] : F.tm[1];
+  const vfloat<N> fz = (m & 4) ? F.t1[2] : F.tm[2];
+  const vbool<N> bx = (fx <= fy) & (fx <= fz);
+  const vbool<N> by = AndNot(fy <= fz, fx <= fy);
+  const vbool<N> bz = !(bx | by);
+  const vint<N> bit = Select(bx, vint<N>(1), Select(by, vint<N>(2), vint<N>(4)));
+  vbool<N> leaves(false);
+  if (m & 1) leaves = leaves | bx;
+  if (m & 2) leaves = leaves | by;
+  if (m & 4) leaves = leaves | bz;
+  const unsigned out = lanes & leaves.Bits();
+  F.in &= ~out;
+  const vbool<N> move = vbool<N>::FromBits(lanes & ~out);
+  F.cur = Select(move, vint<N>(m) + bit, F.cur);
+}
+
+// Octree_Leaf for the lanes of `lanes`: tests the references, and returns
+// the lanes whose query is answered (an occluder, or a closest hit so far at
+// or before the leaf's exit cx).
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNode& n, const RayPacket<N>& P,
+                                          HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit, StatsSum& st)
+{
+  if constexpr (kStats) {
+    st.nLeaves += PopCount(lanes);
+    if (n.count == 0u) st.nEmptyLeaves += PopCount(lanes);
+  }
+  unsigned done = 0;
+  if (n.count) PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, P, H,
+                                                              vbool<N>::FromBits(lanes), anyHit, done, st);
+  return done | (lanes & (H.t <= cx).Bits());
+}
+
+// The lanes of `lanes`, whose directions all have the sign bits signMask.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
+                                            unsigned lanes, unsigned signMask, int anyHit, StatsSum& st)
+{
+  const OctreeHeader& hdr = *sc.octree;
+  const OctreeNode* nodes = sc.octreeNodes;
+  OctreeFrame<N> fr[kOctreeMaxDepth + 1];
+  int d = 0;
+  std::uint32_t c[3] = {0u, 0u, 0u};
+  std::uint32_t level = 0u;
+  OctreeFrame<N>* F = &fr[0];
+  for (int a = 0; a < 3; ++a) {
+    const vfloat<N> lo = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 0u)), P.org[a], P.inv[a]);
+    const vfloat<N> hi = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 1u)), P.org[a], P.inv[a]);
+    F->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 1u, 1u)), P.org[a], P.inv[a]);
+    const bool neg = (signMask >> a) & 1u;
+    F->t0[a] = neg ? hi : lo;
+    F->t1[a] = neg ? lo : hi;
+  }
+  const vfloat<N> rootEnter = FMax(FMax(F->t0[0], F->t0[1]), F->t0[2]);
+  const vfloat<N> rootExit = FMin(FMin(F->t1[0], F->t1[1]), F->t1[2]);
+  unsigned live = lanes & (FMax(rootEnter, P.tmin) <= FMin(rootExit, H.t)).Bits();
+  if (!live) return;
+  if constexpr (kStats) st.nTS += PopCount(live);
+  if (nodes[0].childMask == 0u) {
+    OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[0], P, H, live, rootExit, anyHit, st);
+    return;
+  }
+  F->cur = OctreeFirstChildN<N>(F->tm, FMax(rootEnter, P.tmin));
+  F->node = 0u;
+  F->in = live;
+  F->desc = 0u;
+  F->m = 0;
+  for (;;) {
+    // The next child that is some live lane's current one.
+    unsigned here = 0;
+    while (F->m < 8 && !(here = F->in & live & (F->cur == vint<N>(F->m)).Bits())) ++F->m;
+    if (F->m == 8) {
+      // Every lane has left the node: climb, and move the lanes that come
+      // back from child m on in the parent.
+      if (d == 0) return;
+      F = &fr[--d];
+      --level;
+      for (int a = 0; a < 3; ++a) c[a] >>= 1;
+      OctreeFrame_Advance<N>(*F, F->desc & live);
+      ++F->m;
+      continue;
+    }
+    const int m = F->m;
+    // Child m spans [ce, cx] for each lane.
+    const vfloat<N> ce =
+        FMax(FMax((m & 1) ? F->tm[0] : F->t0[0], (m & 2) ? F->tm[1] : F->t0[1]), (m & 4) ? F->tm[2] : F->t0[2]);
+    const vfloat<N> cx =
+        FMin(FMin((m & 1) ? F->t1[0] : F->tm[0], (m & 2) ? F->t1[1] : F->tm[1]), (m & 4) ? F->t1[2] : F->tm[2]);
+    // Front to back: a lane whose child starts beyond its hit is finished.
+    const unsigned beyond = here & (ce > H.t).Bits();
+    live &= ~beyond;
+    here &= ~beyond;
+    const unsigned vis = here & ((ce <= cx) & (cx >= P.tmin)).Bits();
+    if (vis) {
+      const std::uint32_t o = std::uint32_t(m) ^ signMask;
+      const OctreeNode& n = nodes[F->node];
+      if constexpr (kStats) st.nTS += PopCount(vis);
+      if (((n.childMask >> o) & 1u) == 0u) {
+        // An empty octant: an empty leaf that is not stored.
+        if constexpr (kStats) {
+          st.nLeaves += PopCount(vis);
+          st.nEmptyLeaves += PopCount(vis);
+        }
+        live &= ~(vis & (H.t <= cx).Bits());
+      } else {
+        const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
+        if (nodes[ci].childMask == 0u) {
+          live &= ~OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[ci], P, H, vis, cx, anyHit, st);
+        } else {
+          // Descend with the lanes that enter; the others move on first.
+          OctreeFrame_Advance<N>(*F, here & ~vis);
+          F->desc = vis;
+          OctreeFrame<N>* G = &fr[++d];
+          ++level;
+          for (int a = 0; a < 3; ++a) {
+            c[a] = 2u * c[a] + ((o >> a) & 1u);
+            if ((m >> a) & 1) {
+              G->t0[a] = F->tm[a];
+              G->t1[a] = F->t1[a];
+            } else {
+              G->t0[a] = F->t0[a];
+              G->t1[a] = F->tm[a];
+            }
+            G->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, level + 1u, 2u * c[a] + 1u)), P.org[a], P.inv[a]);
+          }
+          G->cur = OctreeFirstChildN<N>(G->tm, FMax(ce, P.tmin));
+          G->node = ci;
+          G->in = vis;
+          G->desc = 0u;
+          G->m = 0;
+          F = G;
+          continue;
+        }
+      }
+    }
+    OctreeFrame_Advance<N>(*F, here & live);
+    ++F->m;
+  }
+}
+
+// Closest hit (anyHit = 0) or any hit of the lanes in `active`, one pass per
+// class of direction signs among them.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void OctreePacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
+                                       int anyHit, StatsSum& st)
+{
+  const unsigned neg[3] = {P.invNeg[0].Bits(), P.invNeg[1].Bits(), P.invNeg[2].Bits()};
+  for (unsigned rest = active.Bits(); rest;) {
+    const int l = LowestBit(rest);
+    const unsigned signMask = ((neg[0] >> l) & 1u) | (((neg[1] >> l) & 1u) << 1) | (((neg[2] >> l) & 1u) << 2);
+    unsigned cls = rest;
+    for (int a = 0; a < 3; ++a) cls &= ((signMask >> a) & 1u) ? neg[a] : ~neg[a];
+    rest &= ~cls;
+    OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, st);
+  }
+}
+
+// Traces positions [job.begin, job.end) in packets of N.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void OctreePacket_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const PrimView pv = MakePrimView(sc);
+  StatsSum st;
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    const int count = Packet_Rays<N>(job, p, recs, idx);
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    OctreePacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
+    Packet_StoreHits<N>(sc, pv, job, H, idx, count);
+  }
+  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

@@ -1,0 +1,173 @@
+// Octree, one ray at a time, for incoherent rays: Octree_Trace of
+// kernels/octree.h step by step (the same planes, parameters, child order and
+// stopping rules), with SIMD inside the ray's work: rays are prepared N at a
+// time (RayPacket_Init), and a leaf's primitives are tested 4 at a time,
+// gathered from the scene arrays (simd/prim_range.h; no extra memory).
+// The stack keeps each ancestor's parameters instead of recomputing them from
+// the planes on the way back up: they are the same values, bit for bit.
+#pragma once
+
+#include "simd/bvh_single.h"
+#include "simd/kernel_common.h"
+#include "simd/octree_packet.h"
+#include "simd/prim_range.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// fmaxf / fminf of C where neither operand is NaN (glibc x86-64: maxss /
+// minss, which return b on a tie, as the vector FMax / FMin). No parameter
+// is NaN: Ray_PlaneT maps NaN to 0, and tmin and the hit distance are
+// numbers.
+CR_SIMD_INLINE float FMaxS(float a, float b) { return a > b ? a : b; }
+CR_SIMD_INLINE float FMinS(float a, float b) { return a < b ? a : b; }
+
+// Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
+template <unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
+{
+  const OctreeHeader& hdr = *sc.octree;
+  const OctreeNode* nodes = sc.octreeNodes;
+  std::uint32_t signMask = 0u;
+  for (int a = 0; a < 3; ++a)
+    if (ray.inv[a] < 0.0f) signMask |= 1u << a;
+  struct Frame {
+    float t0[3], tm[3], t1[3];
+    std::uint32_t node, m;
+  };
+  Frame stack[kOctreeMaxDepth];
+  int sp = 0;
+  std::uint32_t c[3] = {0u, 0u, 0u};
+  std::uint32_t level = 0u;
+  float t0[3], tm[3], t1[3];
+  for (int a = 0; a < 3; ++a) {
+    const float lo = PlaneT(OctreePlane(hdr, a, 0u, 0u), ray.org[a], ray.inv[a]);
+    const float hi = PlaneT(OctreePlane(hdr, a, 0u, 1u), ray.org[a], ray.inv[a]);
+    tm[a] = PlaneT(OctreePlane(hdr, a, 1u, 1u), ray.org[a], ray.inv[a]);
+    const bool neg = (signMask >> a) & 1u;
+    t0[a] = neg ? hi : lo;
+    t1[a] = neg ? lo : hi;
+  }
+  const float rootEnter = FMaxS(FMaxS(t0[0], t0[1]), t0[2]);
+  const float rootExit = FMinS(FMinS(t1[0], t1[1]), t1[2]);
+  if (!(FMaxS(rootEnter, ray.tmin) <= FMinS(rootExit, hit.t))) return;
+  if constexpr (kStats) ++st.nTS;
+  PackRay<4> pr;
+  PackRay_Init<4>(pr, ray);
+  // Octree_Leaf: true when the query is answered.
+  auto leaf = [&](const OctreeNode& n, float tExit) {
+    if constexpr (kStats) {
+      ++st.nLeaves;
+      if (n.count == 0u) ++st.nEmptyLeaves;
+    }
+    if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, pr, hit, anyHit, st) &&
+        anyHit)
+      return true;
+    return hit.t <= tExit;
+  };
+  if (nodes[0].childMask == 0u) {
+    leaf(nodes[0], rootExit);
+    return;
+  }
+  std::uint32_t ni = 0u;
+  std::uint32_t m = (tm[0] < FMaxS(rootEnter, ray.tmin) ? 1u : 0u) | (tm[1] < FMaxS(rootEnter, ray.tmin) ? 2u : 0u) |
+                    (tm[2] < FMaxS(rootEnter, ray.tmin) ? 4u : 0u);
+  for (;;) {
+    const float ce = FMaxS(FMaxS((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]);
+    const float cx = FMinS(FMinS((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]);
+    if (ce > hit.t) return;
+    if (ce <= cx && cx >= ray.tmin) {
+      const std::uint32_t o = m ^ signMask;
+      const OctreeNode& n = nodes[ni];
+      if constexpr (kStats) ++st.nTS;
+      if (((n.childMask >> o) & 1u) == 0u) {
+        if constexpr (kStats) {
+          ++st.nLeaves;
+          ++st.nEmptyLeaves;
+        }
+        if (hit.t <= cx) return;
+      } else {
+        const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
+        if (nodes[ci].childMask == 0u) {
+          if (leaf(nodes[ci], cx)) return;
+        } else {
+          Frame& f = stack[sp++];
+          for (int a = 0; a < 3; ++a) {
+            f.t0[a] = t0[a];
+            f.tm[a] = tm[a];
+            f.t1[a] = t1[a];
+          }
+          f.node = ni;
+          f.m = m;
+          ++level;
+          for (int a = 0; a < 3; ++a) {
+            c[a] = 2u * c[a] + ((o >> a) & 1u);
+            if ((m >> a) & 1u)
+              t0[a] = tm[a];
+            else
+              t1[a] = tm[a];
+            tm[a] = PlaneT(OctreePlane(hdr, a, level + 1u, 2u * c[a] + 1u), ray.org[a], ray.inv[a]);
+          }
+          ni = ci;
+          const float tStart = FMaxS(ce, ray.tmin);
+          m = (tm[0] < tStart ? 1u : 0u) | (tm[1] < tStart ? 2u : 0u) | (tm[2] < tStart ? 4u : 0u);
+          continue;
+        }
+      }
+    }
+    // Next child across the exit plane of child m, climbing while that is
+    // the node's own far plane.
+    for (;;) {
+      const float fx = (m & 1u) ? t1[0] : tm[0];
+      const float fy = (m & 2u) ? t1[1] : tm[1];
+      const float fz = (m & 4u) ? t1[2] : tm[2];
+      const std::uint32_t bit = (fx <= fy) ? (fx <= fz ? 1u : 4u) : (fy <= fz ? 2u : 4u);
+      if ((m & bit) == 0u) {
+        m |= bit;
+        break;
+      }
+      if (sp == 0) return;
+      const Frame& f = stack[--sp];
+      for (int a = 0; a < 3; ++a) {
+        t0[a] = f.t0[a];
+        tm[a] = f.tm[a];
+        t1[a] = f.t1[a];
+        c[a] >>= 1;
+      }
+      ni = f.node;
+      m = f.m;
+      --level;
+    }
+  }
+}
+
+// Traces positions [job.begin, job.end) one ray at a time.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void OctreeSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const PrimView pv = MakePrimView(sc);
+  StatsSum st;
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    for (int l = 0; l < count; ++l) {
+      idx[l] = RayIndex(job, p + std::size_t(l));
+      recs[l] = &job.rays[idx[l]];
+    }
+    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    Ray rays[N];
+    RayPacket_Extract<N>(P, H, rays);
+    for (int l = 0; l < count; ++l) {
+      Hit hit;
+      Hit_Init(&hit, &rays[l]);
+      OctreeSingle_Trace<kTypes, kFast, kStats>(sc, rays[l], hit, job.occlusion, st);
+      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    }
+  }
+  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

@@ -1,0 +1,194 @@
+// The SIMD grid and octree traversals (simd/grid_*.h, simd/octree_*.h) on
+// the cases their scalar kernels were made robust for: origins exactly on
+// cell planes, edges and corners, direction components of +0 and -0, and
+// packets whose lanes have mixed direction signs. Both walk the scalar
+// kernel's cells in the scalar kernel's order, lane by lane, so every answer
+// (t bits, id, u, v; for occlusion the occluder too) and the per-ray
+// statistics must equal the scalar backend's.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "accel/accel.h"
+#include "simd/isa.h"
+#include "test_util.h"
+
+namespace cr::test_simd_cells {
+// The planes the traversals walk.
+typedef float real;
+#include "kernels/grid.h"
+#include "kernels/octree.h"
+}  // namespace cr::test_simd_cells
+
+using namespace cr;
+
+namespace {
+
+const AccelKind kCellAccels[] = {AccelKind::Grid, AccelKind::Octree};
+const char* const kVariants[] = {"packet", "single"};
+
+std::vector<std::string> AvailableIsas()
+{
+  std::vector<std::string> out;
+  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back("sse4");
+  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back("avx2");
+  return out;
+}
+
+// Random rays inside the structure's box whose origin coordinates are moved,
+// with probability 0.6 each, exactly onto a cell plane (plane(a, u) gives
+// the plane nearest to coordinate fraction u on axis a), and whose direction
+// components are +0 or -0 with probability 0.35 each. Consecutive rays share
+// nothing, so packets mix direction signs.
+template <class Plane>
+std::vector<RayRecord> SnappedRays(const float lo[3], const float hi[3], const Plane& plane, std::uint64_t n,
+                                   std::uint64_t seed)
+{
+  std::vector<RayRecord> rays;
+  for (std::uint64_t i = 0; i < n; ++i) {
+    auto rnd = [&](std::uint64_t k) { return ToUnit(HashRandom(seed, i, k)); };
+    RayRecord r{};
+    bool anyDir = false;
+    for (int a = 0; a < 3; ++a) {
+      const double u = rnd(1 + a);
+      r.org[a] = rnd(4 + a) < 0.6 ? plane(a, u, rnd(17)) : float(lo[a] + u * (double(hi[a]) - lo[a]));
+      float d = float(2.0 * rnd(7 + a) - 1.0);
+      if (rnd(10 + a) < 0.35) d = rnd(13 + a) < 0.5 ? 0.0f : -0.0f;
+      r.dir[a] = d;
+      anyDir = anyDir || d != 0.0f;
+    }
+    if (!anyDir) r.dir[int(rnd(16) * 3) % 3] = rnd(18) < 0.5 ? 1.0f : -1.0f;
+    r.tmin = 0.0f;
+    r.tmax = INFINITY;
+    rays.push_back(r);
+  }
+  return rays;
+}
+
+std::vector<RayRecord> GridSnappedRays(const Scene& scene, std::uint64_t n)
+{
+  AccelInfo info;
+  const GridData grid = BuildGrid(scene, AccelParams{}, info);
+  const GridHeader& h = grid.header;
+  return SnappedRays(
+      h.bmin, h.bmax,
+      [&](int a, double u, double) {
+        return test_simd_cells::Grid_Plane(&h, a, int(std::lround(u * h.res[a])));
+      },
+      n, 21);
+}
+
+std::vector<RayRecord> OctreeSnappedRays(const Scene& scene, std::uint64_t n)
+{
+  AccelInfo info;
+  const OctreeData oct = BuildOctree(scene, AccelParams{}, info);
+  const OctreeHeader& h = oct.header;
+  const float lo[3] = {h.rootMin[0], h.rootMin[1], h.rootMin[2]};
+  const float hi[3] = {h.rootMin[0] + h.rootSize, h.rootMin[1] + h.rootSize, h.rootMin[2] + h.rootSize};
+  return SnappedRays(
+      lo, hi,
+      [&](int a, double u, double w) {
+        const unsigned level = 1 + unsigned(w * std::max(1u, h.maxDepth));
+        return test_simd_cells::Octree_Plane(&h, a, level, unsigned(std::lround(u * std::ldexp(1.0, int(level)))));
+      },
+      n, 22);
+}
+
+std::vector<HitRecord> Trace(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
+                             bool occlusion, TraceStatsSum* stats = nullptr)
+{
+  auto tracer = CreateTracer(scene, cfg);
+  std::vector<HitRecord> hits;
+  tracer->Trace(rays, hits, occlusion, stats);
+  REQUIRE(hits.size() == rays.size());
+  return hits;
+}
+
+std::size_t CountSame(const std::vector<HitRecord>& a, const std::vector<HitRecord>& b)
+{
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) same += std::memcmp(&a[i], &b[i], sizeof(HitRecord)) == 0;
+  return same;
+}
+
+}  // namespace
+
+TEST_CASE("simd grid and octree: rays on cell planes with +-0 directions, bit for bit the scalar backend")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) {
+    MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2");
+    return;
+  }
+  for (const char* name : {"balls", "teapot", "rings", "tetra", "tree"}) {
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    for (AccelKind accel : kCellAccels) {
+      const auto rays = accel == AccelKind::Grid ? GridSnappedRays(scene, 3000) : OctreeSnappedRays(scene, 3000);
+      for (Precision prec : {Precision::Robust, Precision::Fast})
+        for (bool occlusion : {false, true}) {
+          TraceConfig scalarCfg;
+          scalarCfg.backend = Backend::Scalar;
+          scalarCfg.accel = accel;
+          scalarCfg.precision = prec;
+          const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion);
+          std::size_t nHits = 0;
+          for (const HitRecord& h : scalarHits) nHits += h.prim != CR_NO_HIT;
+          CHECK(nHits > rays.size() / 20);  // the set meets the geometry
+          for (const std::string& isa : isas)
+            for (const char* variant : kVariants) {
+              TraceConfig cfg = scalarCfg;
+              cfg.backend = Backend::Simd;
+              cfg.isa = isa;
+              cfg.variant = variant;
+              const auto hits = Trace(scene, cfg, rays, occlusion);
+              INFO(name, " ", AccelKindName(accel), " ", PrecisionName(prec), occlusion ? " occlusion " : " closest ",
+                   isa, " ", variant);
+              CHECK(CountSame(hits, scalarHits) == rays.size());
+            }
+          if (prec == Precision::Robust) {
+            const auto r = test::CheckTracer(scene, scalarCfg, rays, occlusion);
+            INFO(name, " ", AccelKindName(accel), occlusion ? " occlusion" : " closest", " (scalar vs reference)");
+            CHECK(r.wrong == 0);
+          }
+        }
+    }
+  }
+}
+
+TEST_CASE("simd grid and octree: per-ray statistics equal the scalar backend's")
+{
+  const auto isas = AvailableIsas();
+  if (isas.empty()) return;
+  for (const char* name : {"tree", "gears"}) {
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
+      const auto rays = test::MakeRays(scene, kind, 32);
+      for (AccelKind accel : kCellAccels) {
+        TraceConfig scalarCfg;
+        scalarCfg.backend = Backend::Scalar;
+        scalarCfg.accel = accel;
+        scalarCfg.stats = true;
+        TraceStatsSum want;
+        const auto scalarHits = Trace(scene, scalarCfg, rays, false, &want);
+        REQUIRE(want.nTS > 0);
+        REQUIRE(want.nIT > 0);
+        for (const std::string& isa : isas)
+          for (const char* variant : kVariants) {
+            TraceConfig cfg = scalarCfg;
+            cfg.backend = Backend::Simd;
+            cfg.isa = isa;
+            cfg.variant = variant;
+            TraceStatsSum got;
+            const auto hits = Trace(scene, cfg, rays, false, &got);
+            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant);
+            CHECK(CountSame(hits, scalarHits) == rays.size());
+            CHECK(got.rays == want.rays);
+            CHECK(got.nTS == want.nTS);
+            CHECK(got.nLeaves == want.nLeaves);
+            CHECK(got.nEmptyLeaves == want.nEmptyLeaves);
+            CHECK(got.nIT == want.nIT);
+          }
+      }
+    }
+  }
+}
