@@ -90,13 +90,25 @@ COLORS = {"simd": "tab:blue", "scalar": "tab:green", "opencl": "tab:orange", "em
 MARKERS = {"robust": "o", "fast": "v", "fp64": "s", "embree": "D"}
 
 
+def label_points(ax, xs, ys, labels):
+    """Annotates points with slanted labels, stacking the labels of points
+    that nearly coincide (within 15% in x, 5% in y) instead of overprinting."""
+    placed = []
+    for x, y, text in sorted(zip(xs, ys, labels), key=lambda t: (t[1], t[0])):
+        k = sum(1 for (px, py) in placed
+                if abs(math.log10(x / px)) < 0.06 and abs(math.log10(y / py)) < 0.02)
+        placed.append((x, y))
+        ax.annotate(text, (x, y), fontsize=6, xytext=(3, 3 + 7 * k), textcoords="offset points", rotation=35,
+                    rotation_mode="anchor")
+
+
 def scatter_front(ax, pts, key, ylabel, floor, title):
     xs = [p["speed"] for p in pts]
     ys = [max(p[key], floor) for p in pts]
     for p, x, y in zip(pts, xs, ys):
         ax.scatter(x, y, color=COLORS.get(p["backend"], "k"), marker=MARKERS.get(p["precision"], "o"), s=36,
                    zorder=3)
-        ax.annotate(p["label"], (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    label_points(ax, xs, ys, [p["label"] for p in pts])
     front = pareto(list(zip(xs, ys)))
     if front:
         fx = [xs[i] for i in front]
@@ -150,7 +162,7 @@ def plot_images(res, out):
     images = [r for r in res.get("images", []) if r.get("render_ms", 0) > 0]
     if not images:
         return
-    fig, (a, b) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (a, same, b) = plt.subplots(1, 3, figsize=(18, 4.8))
     by = OrderedDict()
     for r in images:
         by.setdefault(r["label"], []).append(r)
@@ -166,11 +178,25 @@ def plot_images(res, out):
                 fontsize=9)
     a.grid(True, alpha=0.3)
     a.legend(fontsize=7)
+    # Arithmetic alone: against the reference's render at the same spp and
+    # seed; identical images (infinite PSNR) drawn at the top.
+    cap = 100.0
+    for label, rs in by.items():
+        rs = sorted(rs, key=lambda r: r["spp"])
+        ys = [r["psnr_same_spp"] if r.get("psnr_same_spp") is not None else cap for r in rs]
+        same.plot([r["spp"] for r in rs], ys, marker=MARKERS.get(rs[0]["precision"], "o"),
+               color=COLORS.get(rs[0]["backend"], "k"), label=label, alpha=0.8)
+    same.set_xscale("log", base=2)
+    same.set_xlabel("samples per pixel")
+    same.set_ylabel(f"PSNR (dB) against the fp64 render at the same spp ({cap:g}: identical)")
+    same.set_title("arithmetic alone: same samples, fp64 reference", fontsize=9)
+    same.grid(True, alpha=0.3)
+    same.legend(fontsize=7)
     xs = [1e3 / r["render_ms"] for r in images]
     ys = [r["mean_error"] for r in images]
     for r, x, y in zip(images, xs, ys):
         b.scatter(x, y, color=COLORS.get(r["backend"], "k"), marker=MARKERS.get(r["precision"], "o"))
-        b.annotate(f"{r['label']} {r['spp']}spp", (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    label_points(b, xs, ys, [f"{r['label']} {r['spp']}spp" for r in images])
     front = pareto(list(zip(xs, ys)))
     b.scatter([xs[i] for i in front], [ys[i] for i in front], facecolors="none", edgecolors="k", s=110,
               label="Pareto front (render time, error)")

@@ -35,6 +35,7 @@ struct BenchOptions {
   std::uint64_t rays = 1u << 16;  // rays per set (primary: an image of about this many pixels)
   std::string outDir = "bench-out";
   int threads = 0;                // 0: all cores
+  std::string device;             // OpenCL device ("N" or "platform:device"), empty: the default
   bool quick = false;             // CI size: few rays, one repeat, no image study
   bool images = true;             // spp against image error
   bool plots = true;              // run bench/plot.py when python3 and matplotlib are there

@@ -89,6 +89,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
       cfg.precision = combo.precision;
       cfg.variant = combo.variant;
       cfg.threads = o.threads;
+      if (combo.backend == Backend::OpenCL) cfg.device = o.device;
       std::unique_ptr<Tracer> tracer, statsTracer;
       std::string skip;
       const bool rssKnown = ResetPeakRss();

@@ -51,13 +51,14 @@ std::vector<T> ParseList(const std::vector<std::string>& items, Parse parse)
 }
 
 // Whether an OpenCL device can be opened, and whether it has cl_khr_fp64.
-void ProbeOpenCL(bool& available, bool& fp64, std::string& why)
+void ProbeOpenCL(const std::string& device, bool& available, bool& fp64, std::string& why)
 {
   try {
-    ClContext c = CreateClContext("");
+    ClContext c = CreateClContext(device);
     available = true;
     fp64 = c.dev.fp64;
   } catch (const std::exception& e) {
+    if (!device.empty()) throw;  // a device asked for by name must exist
     available = false;
     fp64 = false;
     why = e.what();
@@ -118,7 +119,7 @@ Run RegisterBench(CLI::App& app)
     std::vector<std::string> scenes, accels, backends, kinds, precisions;
     int repeat = -1, threads = 0;
     std::uint64_t rays = 0, seed = 1;
-    std::string out = "bench-out", imageScene;
+    std::string out = "bench-out", imageScene, device;
     bool hard = false, scaling = false, quick = false, noImages = false, noPlots = false, noStats = false;
   };
   auto o = std::make_shared<O>();
@@ -134,6 +135,7 @@ Run RegisterBench(CLI::App& app)
   cmd->add_option("--repeat", o->repeat, "Timed runs per row (default 5; quick 1)")->check(CLI::Range(1, 1000));
   cmd->add_option("--rays", o->rays, "Rays per set (default 65536; quick 4096)")->check(CLI::Range(1, 1 << 26));
   cmd->add_option("--threads", o->threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--device", o->device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU)");
   cmd->add_option("--seed", o->seed, "Seed of the ray sets")->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--image-scene", o->imageScene, "Scene of the spp-against-error study (default: balls, else the first)");
@@ -152,6 +154,7 @@ Run RegisterBench(CLI::App& app)
     b.outDir = o->out;
     b.threads = o->threads;
     b.seed = o->seed;
+    b.device = o->device;
     b.stats = !o->noStats;
     b.images = !o->noImages;
     b.accels = ParseList<AccelKind>(o->accels, ParseAccelKind);
@@ -221,7 +224,7 @@ Run RegisterBench(CLI::App& app)
       std::string clWhy;
       const bool wantCl = b.backends.empty() ||
                           std::find(b.backends.begin(), b.backends.end(), Backend::OpenCL) != b.backends.end();
-      if (wantCl) ProbeOpenCL(clAvailable, clFp64, clWhy);
+      if (wantCl) ProbeOpenCL(b.device, clAvailable, clFp64, clWhy);
       if (wantCl && !clAvailable) {
         notes.push_back(fmt::format("OpenCL rows skipped: {}", clWhy));
         fmt::print(stderr, "bench: {}\n", notes.back());
