@@ -288,6 +288,7 @@ def plot_scaling(res, out):
         ax.grid(True, which="both", alpha=0.3)
     axes[0, 0].legend(fontsize=6, ncol=2)
     fig.suptitle("cost growth with scene size (sphereflake: solid, bumpy sphere: dashed, stadium: star)", fontsize=10)
+    fig.subplots_adjust(hspace=0.3)
     save(fig, out, "scaling")
 
 

@@ -1,5 +1,7 @@
 #include "bench/machine_info.h"
 
+#include <malloc.h>
+
 #include <array>
 #include <cstdio>
 #include <ctime>
@@ -78,6 +80,9 @@ std::uint64_t PeakRssBytes()
 
 bool ResetPeakRss()
 {
+  // Freed heap that glibc keeps would count towards the next peak: give it
+  // back first, so a peak belongs to what was allocated after the reset.
+  malloc_trim(0);
   std::ofstream f("/proc/self/clear_refs");
   if (!f) return false;
   f << "5";

@@ -17,8 +17,10 @@ nlohmann::json MachineInfo(const std::string& sourceRoot);
 double LoadAverage1();
 
 // Peak resident set of this process (VmHWM), and its reset (Linux
-// /proc/self/clear_refs "5"), so that a study can attribute a peak to one
-// configuration. 0 / false where unsupported.
+// /proc/self/clear_refs "5", after returning freed heap to the system), so
+// that a study can attribute a peak to one configuration; the peak still
+// includes what is alive across configurations (the scene, the reference,
+// the ray sets). 0 / false where unsupported.
 std::uint64_t PeakRssBytes();
 bool ResetPeakRss();
 

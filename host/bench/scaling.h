@@ -21,8 +21,8 @@ std::vector<SceneRef> ScalingScenes(bool quick);
 std::vector<Combo> ScalingCombos();
 
 // Options of the study derived from a run's: primary and diffuse rays, three
-// timed runs, statistics up to 10^6 primitives (the statistics tracer is a
-// second structure in memory).
+// timed runs, statistics up to 2 x 10^6 primitives (the statistics tracer is
+// a second structure in memory, and its run is slow on the largest sizes).
 BenchOptions ScalingOptions(const BenchOptions& base);
 
 }  // namespace cr::bench

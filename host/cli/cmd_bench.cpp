@@ -170,6 +170,9 @@ Run RegisterBench(CLI::App& app)
     const std::string root = bench::FindSourceRoot();
     b.commandLine = CommandLine();
 
+    if ((o->hard || o->scaling) && !o->scenes.empty())
+      throw InputError("--hard and --scaling bring their own scenes; drop the scene names");
+
     json results = bench::LoadResults(b.outDir);
     const double loadStart = bench::LoadAverage1();
     std::size_t nRows = 0;
@@ -205,7 +208,15 @@ Run RegisterBench(CLI::App& app)
     if (o->scaling) {
       const bench::BenchOptions so = bench::ScalingOptions(b);
       const auto scenes = bench::ScalingScenes(b.quick);
-      const auto combos = bench::ScalingCombos();
+      // --accel and --backend narrow the study's configurations.
+      std::vector<bench::Combo> combos;
+      for (const auto& c : bench::ScalingCombos()) {
+        const bool accelOk = b.accels.empty() || c.backend == Backend::Embree ||
+                             std::find(b.accels.begin(), b.accels.end(), c.accel) != b.accels.end();
+        const bool backendOk = b.backends.empty() || std::find(b.backends.begin(), b.backends.end(), c.backend) != b.backends.end();
+        if (accelOk && backendOk) combos.push_back(c);
+      }
+      if (combos.empty()) throw InputError("--scaling: --accel/--backend leave no configuration (simd and embree run)");
       fmt::print(stderr, "bench: scaling study, {} scenes x {} configurations\n", scenes.size(), combos.size());
       const auto rows = bench::RunRayBench(so, scenes, combos, [&](const bench::Row& r, std::size_t i, std::size_t n) {
         PrintRow(r, i, n, t0);
