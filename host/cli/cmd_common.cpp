@@ -11,7 +11,8 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
 {
   cmd->add_option("--accel", o.accel, "Acceleration structure: grid, octree or bvh")->capture_default_str();
   cmd->add_option("--backend", o.backend,
-                  "Backend: auto (an OpenCL GPU if present, else simd), reference, scalar, simd or opencl")
+                  "Backend: auto (an OpenCL GPU if present, else simd), reference, scalar, simd, opencl, or embree "
+                  "(when built with Embree)")
       ->capture_default_str();
   cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
   cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
@@ -21,7 +22,7 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
   cmd->add_option("--bvh-leaf", o.bvhLeaf, "Max primitives per BVH leaf (0: default)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");
   cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU)");
-  cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; default: the backend's choice");
+  cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; opencl: ray or packet; embree: single or packet8 (-robust: RTC_SCENE_FLAG_ROBUST); default: the backend's choice");
 }
 
 TraceConfig TracerOptions::ToConfig() const
@@ -40,6 +41,28 @@ TraceConfig TracerOptions::ToConfig() const
   c.variant = variant;
   return c;
 }
+
+namespace {
+std::string& CommandLineStore()
+{
+  static std::string s;
+  return s;
+}
+}  // namespace
+
+void SetCommandLine(int argc, char** argv)
+{
+  std::string s;
+  for (int i = 0; i < argc; ++i) {
+    std::string a = argv[i];
+    if (i == 0) a = "cellray";  // not the path the binary was run from
+    if (a.find_first_of(" \t'\"") != std::string::npos) a = "'" + a + "'";
+    s += (i ? " " : "") + a;
+  }
+  CommandLineStore() = s;
+}
+
+const std::string& CommandLine() { return CommandLineStore(); }
 
 void ParseSize(const std::string& s, int& w, int& h)
 {

@@ -36,5 +36,10 @@ Run RegisterCheck(CLI::App& app);
 Run RegisterRender(CLI::App& app);
 Run RegisterGen(CLI::App& app);
 Run RegisterHard(CLI::App& app);
+Run RegisterBench(CLI::App& app);
+
+// The program's command line, as typed (recorded by bench in results.json).
+void SetCommandLine(int argc, char** argv);
+const std::string& CommandLine();
 
 }  // namespace cr::cli

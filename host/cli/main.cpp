@@ -1,4 +1,4 @@
-// cellray: one binary, subcommands info, rays, trace, check, render, gen, hard.
+// cellray: one binary, subcommands info, rays, trace, check, render, gen, hard, bench.
 // Errors are caught here, once: bad input exits 2, runtime failures exit 1,
 // each reported as one line `cellray: <what>` on stderr.
 #include <cstdio>
@@ -18,6 +18,7 @@ int main(int argc, char** argv)
   app.require_subcommand(1);
   app.set_version_flag("--version", "cellray 0.1.0");
   std::map<CLI::App*, cr::cli::Run> runs;
+  cr::cli::SetCommandLine(argc, argv);
   try {
     auto add = [&](cr::cli::Run (*reg)(CLI::App&)) {
       std::size_t before = app.get_subcommands({}).size();
@@ -32,6 +33,7 @@ int main(int argc, char** argv)
     add(cr::cli::RegisterRender);
     add(cr::cli::RegisterGen);
     add(cr::cli::RegisterHard);
+    add(cr::cli::RegisterBench);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cellray: internal error while setting up the command line: %s\n", e.what());
     return cr::kExitRuntime;

@@ -20,7 +20,8 @@ Backend ParseBackend(const std::string& s)
   if (s == "scalar") return Backend::Scalar;
   if (s == "simd") return Backend::Simd;
   if (s == "opencl") return Backend::OpenCL;
-  throw InputError(fmt::format("unknown backend '{}' (expected reference, scalar, simd or opencl)", s));
+  if (s == "embree") return Backend::Embree;
+  throw InputError(fmt::format("unknown backend '{}' (expected reference, scalar, simd, opencl or embree)", s));
 }
 
 const char* BackendName(Backend b)
@@ -30,6 +31,7 @@ const char* BackendName(Backend b)
     case Backend::Scalar: return "scalar";
     case Backend::Simd: return "simd";
     case Backend::OpenCL: return "opencl";
+    case Backend::Embree: return "embree";
   }
   return "?";
 }
@@ -48,6 +50,15 @@ Backend ResolveAutoBackend(const std::string& deviceSpec)
     Warn(fmt::format("no OpenCL platform ({}): using the simd backend", e.what()));
     return Backend::Simd;
   }
+}
+
+bool EmbreeAvailable()
+{
+#ifdef CELLRAY_HAVE_EMBREE
+  return true;
+#else
+  return false;
+#endif
 }
 
 Precision ParsePrecision(const std::string& s)
@@ -117,6 +128,9 @@ class ReferenceBackend final : public Tracer {
 std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig& config);
 std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config);
 std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config);
+#ifdef CELLRAY_HAVE_EMBREE
+std::unique_ptr<Tracer> CreateEmbreeTracer(const Scene& scene, const TraceConfig& config);
+#endif
 
 std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
 {
@@ -125,6 +139,12 @@ std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& conf
     case Backend::Scalar: return CreateScalarTracer(scene, config);
     case Backend::Simd: return CreateSimdTracer(scene, config);
     case Backend::OpenCL: return CreateOpenCLTracer(scene, config);
+    case Backend::Embree:
+#ifdef CELLRAY_HAVE_EMBREE
+      return CreateEmbreeTracer(scene, config);
+#else
+      throw InputError("backend embree: this build has no Embree (Embree 3 was not found when it was configured)");
+#endif
   }
   throw RuntimeError("unknown backend");
 }

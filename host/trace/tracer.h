@@ -17,7 +17,9 @@
 
 namespace cr {
 
-enum class Backend { Reference, Scalar, Simd, OpenCL };
+// Embree: Intel's Embree 3 as a baseline (host/embree/), present only when
+// the build found it (CELLRAY_HAVE_EMBREE; EmbreeAvailable()).
+enum class Backend { Reference, Scalar, Simd, OpenCL, Embree };
 Backend ParseBackend(const std::string& s);  // InputError on unknown names
 // The backend `auto` stands for: opencl when an OpenCL GPU exists (or a
 // device is named by `deviceSpec` / $CELLRAY_DEVICE), else simd. With no
@@ -25,6 +27,7 @@ Backend ParseBackend(const std::string& s);  // InputError on unknown names
 // warning.
 Backend ResolveAutoBackend(const std::string& deviceSpec);
 const char* BackendName(Backend b);
+bool EmbreeAvailable();
 
 enum class Precision { Fast, Robust, Fp64 };
 Precision ParsePrecision(const std::string& s);
@@ -39,7 +42,7 @@ struct TraceConfig {
   bool stats = false;       // gather Havran's per-ray measures
   std::string isa;          // simd: avx2 | sse4 | scalar, empty: best available
   std::string device;       // opencl: "N" or "platform:device", empty: default
-  std::string variant;      // traversal variant (e.g. ray | packet), empty: default
+  std::string variant;      // traversal variant (e.g. ray | packet; embree: single | packet8), empty: default
   // Internal hit form for the renderer: HitRecord.prim is the unified piece
   // index g (kernels/types.h) and u, v are reported for every triangle piece.
   bool unifiedHits = false;

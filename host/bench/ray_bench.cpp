@@ -1,0 +1,157 @@
+#include "bench/ray_bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <string_view>
+
+#include <fmt/format.h>
+#include <tbb/info.h>
+
+#include "bench/machine_info.h"
+#include "bench/ray_cache.h"
+#include "core/error.h"
+#include "reference/check.h"
+#include "reference/reference.h"
+
+namespace cr::bench {
+
+namespace {
+
+double MsSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Identical hit sets get identical verdicts: robust configurations usually
+// answer bit for bit alike (kernels/ray.h Hit_Closer), so the reference check
+// runs once per distinct answer set of a ray set.
+std::size_t HashHits(const std::vector<HitRecord>& hits)
+{
+  return std::hash<std::string_view>{}(
+      std::string_view(reinterpret_cast<const char*>(hits.data()), hits.size() * sizeof(HitRecord)));
+}
+
+ErrorSummary Summarise(const ref::CheckResult& c)
+{
+  return ErrorSummary{c.agree, c.ties, c.wrong, c.maxRelTErr, c.meanRelTErr};
+}
+
+}  // namespace
+
+Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlusion, int repeat,
+                 std::vector<HitRecord>& hits)
+{
+  tracer.Prepare(occlusion);
+  tracer.Trace(rays, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
+  std::vector<double> ms;
+  std::vector<HitRecord> scratch;
+  for (int r = 0; r < repeat; ++r) {
+    const auto t0 = std::chrono::steady_clock::now();
+    tracer.Trace(rays, scratch, occlusion, nullptr);
+    ms.push_back(MsSince(t0));
+  }
+  std::sort(ms.begin(), ms.end());
+  Timing t;
+  t.repeat = repeat;
+  if (!ms.empty()) {
+    t.medianMs = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+    t.minMs = ms.front();
+    t.maxMs = ms.back();
+  }
+  return t;
+}
+
+std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>& scenes, const std::vector<Combo>& combos,
+                             const RowCallback& onRow)
+{
+  std::vector<Row> rows;
+  const std::size_t total = scenes.size() * combos.size() * o.kinds.size();
+  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  for (const SceneRef& sref : scenes) {
+    const Scene scene = LoadBenchScene(sref);
+    const ref::ReferenceTracer reference(scene);
+    std::vector<RaySet> sets;
+    for (RayKind k : o.kinds) sets.push_back(GetRaySet(o.outDir, sref, scene, reference, RaySetSpec{k, o.rays, o.seed}));
+    std::map<std::pair<std::size_t, std::size_t>, ErrorSummary> checked;  // (kind index, hits hash)
+
+    for (const Combo& combo : combos) {
+      Row proto;
+      proto.scene = sref.name;
+      proto.scenePath = sref.shown;
+      proto.prims = scene.NumPrims();
+      proto.pieces = scene.NumUnified();
+      proto.combo = combo;
+      proto.threads = threads;
+      TraceConfig cfg;
+      cfg.backend = combo.backend;
+      cfg.accel = combo.accel;
+      cfg.precision = combo.precision;
+      cfg.variant = combo.variant;
+      cfg.threads = o.threads;
+      if (combo.backend == Backend::OpenCL) cfg.device = o.device;
+      std::unique_ptr<Tracer> tracer, statsTracer;
+      std::string skip;
+      const bool rssKnown = ResetPeakRss();
+      try {
+        tracer = CreateTracer(scene, cfg);
+        proto.structure = tracer->Info();
+        proto.device = tracer->DeviceName();
+      } catch (const InputError& e) {
+        skip = fmt::format("skipped: {}", e.what());
+      } catch (const RuntimeError& e) {
+        skip = fmt::format("skipped: {}", e.what());
+      }
+      const bool wantStats = o.stats && tracer && combo.backend != Backend::Embree &&
+                             combo.backend != Backend::Reference && proto.pieces <= o.statsMaxPieces;
+      for (std::size_t ki = 0; ki < o.kinds.size(); ++ki) {
+        Row row = proto;
+        row.kind = o.kinds[ki];
+        const RaySet& set = sets[ki];
+        row.rays = set.rays.size();
+        const bool occlusion = row.kind == RayKind::Shadow;
+        if (!skip.empty()) {
+          row.note = skip;
+        } else if (set.rays.empty()) {
+          row.note = "skipped: the ray set is empty (no primary hits for secondary rays)";
+        } else {
+          try {
+            std::vector<HitRecord> hits;
+            row.timing = TimeTrace(*tracer, set.rays, occlusion, o.repeat, hits);
+            row.variantRan = tracer->VariantName();
+            for (const auto& h : hits) row.hits += h.prim != CR_NO_HIT;
+            if (wantStats) {
+              if (!statsTracer) {
+                TraceConfig sc = cfg;
+                sc.stats = true;
+                statsTracer = CreateTracer(scene, sc);
+              }
+              TraceStatsSum sum;
+              std::vector<HitRecord> statsHits;
+              statsTracer->Prepare(occlusion);
+              statsTracer->Trace(set.rays, statsHits, occlusion, &sum);
+              const double n = double(set.rays.size());
+              row.perRay = PerRay{double(sum.nIT) / n, double(sum.nTS) / n, double(sum.nLeaves) / n,
+                                  double(sum.nEmptyLeaves) / n};
+            }
+            const auto key = std::make_pair(ki, HashHits(hits));
+            auto it = checked.find(key);
+            if (it == checked.end())
+              it = checked.emplace(key, Summarise(ref::CheckHits(reference, set.rays, hits, occlusion))).first;
+            row.error = it->second;
+          } catch (const InputError& e) {
+            row.note = fmt::format("skipped: {}", e.what());
+          } catch (const RuntimeError& e) {
+            row.note = fmt::format("failed: {}", e.what());
+          }
+        }
+        if (rssKnown) row.peakRssBytes = PeakRssBytes();
+        rows.push_back(row);
+        if (onRow) onRow(rows.back(), rows.size(), total);
+      }
+    }
+  }
+  return rows;
+}
+
+}  // namespace cr::bench

@@ -1,0 +1,239 @@
+// The `embree` backend: Intel's Embree 3 as the bench's baseline, tracing the
+// same .rays as our backends with the same parallelism (oneTBB parallel_for
+// over blocks of rays). Variants: `single` (rtcIntersect1 / rtcOccluded1 per
+// ray) and `packet8` (rtcIntersect8 / rtcOccluded8 on 8 consecutive rays);
+// a `-robust` suffix builds the scene with RTC_SCENE_FLAG_ROBUST. The build
+// quality is Embree's default (medium). Geometry: embree_scene.h.
+// Hits are mapped to our HitRecord (scene-file ids, or unified indices for
+// the renderer), so `check` and `bench` judge Embree like any backend.
+#ifdef CELLRAY_HAVE_EMBREE
+
+#include <atomic>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "embree/embree_scene.h"
+#include "trace/tracer.h"
+
+namespace cr {
+
+namespace {
+
+using embree::EmbreeScene;
+using embree::OccluderContext;
+
+constexpr std::size_t kPacket = 8;
+
+class EmbreeTracer final : public Tracer {
+ public:
+  EmbreeTracer(const Scene& scene, const TraceConfig& cfg)
+      : scene_(scene), unified_(cfg.unifiedHits), primIds_(scene.UnifiedIds())
+  {
+    std::string v = cfg.variant;
+    const std::string suffix = "-robust";
+    if (v.size() >= suffix.size() && v.compare(v.size() - suffix.size(), suffix.size(), suffix) == 0) {
+      robust_ = true;
+      v.resize(v.size() - suffix.size());
+    }
+    if (v.empty() || v == "single" || v == "ray")
+      packet_ = false;
+    else if (v == "packet8" || v == "packet")
+      packet_ = true;
+    else
+      throw InputError(fmt::format("--variant '{}': the embree backend has single and packet8 (each also with "
+                                   "-robust: RTC_SCENE_FLAG_ROBUST)",
+                                   cfg.variant));
+    if (cfg.accel != AccelKind::BVH)
+      throw InputError(fmt::format("--backend embree builds Embree's own BVH; --accel {} is not available",
+                                   AccelKindName(cfg.accel)));
+    if (cfg.precision != Precision::Robust)
+      throw InputError(fmt::format("--backend embree has Embree's own arithmetic; --precision {} applies to our "
+                                   "backends (--variant single-robust selects RTC_SCENE_FLAG_ROBUST)",
+                                   PrecisionName(cfg.precision)));
+    if (cfg.stats) throw InputError("--backend embree: Embree does not count Havran's measures (drop --stats)");
+    embree::EmbreeOptions opt;
+    opt.robust = robust_;
+    es_ = std::make_unique<EmbreeScene>(scene, opt);
+    if (packet_ && !rtcGetDeviceProperty(es_->Device(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
+      throw InputError("--variant packet8: this Embree or CPU has no 8-wide ray packets (AVX)");
+    info_.buildMs = es_->BuildMs();
+    info_.bytes = es_->Bytes();
+    info_.params = fmt::format("embree {} build=medium flags={}", RTC_VERSION_STRING, robust_ ? "robust" : "none");
+  }
+
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum*) override
+  {
+    hits.resize(rays.size());
+    if (packet_) {
+      const std::size_t nPackets = (rays.size() + kPacket - 1) / kPacket;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nPackets, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) TracePacket(rays, hits, p * kPacket, occlusion);
+      });
+    } else {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) hits[i] = TraceOne(rays[i], occlusion);
+      });
+    }
+  }
+
+  std::string DeviceName() const override { return "cpu (Embree " RTC_VERSION_STRING ")"; }
+  std::string VariantName() const override
+  {
+    return fmt::format("{}{}", packet_ ? "packet8" : "single", robust_ ? " robust" : "");
+  }
+  void Describe(nlohmann::json& j) const override
+  {
+    j["embree_version"] = RTC_VERSION_STRING;
+    j["embree_occluder_lookups"] = occluderLookups_.load();
+  }
+
+ private:
+  const Scene& scene_;
+  bool unified_ = false;
+  bool packet_ = false;
+  bool robust_ = false;
+  std::vector<std::uint32_t> primIds_;
+  std::unique_ptr<EmbreeScene> es_;
+  // Occluded rays whose occluder the filter did not record (looked up with
+  // a closest-hit query instead); expected to stay 0.
+  mutable std::atomic<std::uint64_t> occluderLookups_{0};
+
+  static void SetRay(RTCRay& r, const RayRecord& rec)
+  {
+    r.org_x = rec.org[0];
+    r.org_y = rec.org[1];
+    r.org_z = rec.org[2];
+    r.tnear = rec.tmin;
+    r.dir_x = rec.dir[0];
+    r.dir_y = rec.dir[1];
+    r.dir_z = rec.dir[2];
+    r.time = 0.0f;
+    r.tfar = rec.tmax;
+    r.mask = 0xFFFFFFFFu;
+    r.id = 0;
+    r.flags = 0;
+  }
+
+  void InitContext(OccluderContext& c, std::uint32_t* occluder, unsigned lanes) const
+  {
+    rtcInitIntersectContext(&c.ctx);
+    c.base = es_->Base();
+    c.occluder = occluder;
+    c.lanes = lanes;
+  }
+
+  // Our record of a hit on Embree's geometry geomID, primitive primID.
+  HitRecord Record(unsigned geomID, unsigned primID, float t, float u, float v, bool occlusion) const
+  {
+    if (geomID == RTC_INVALID_GEOMETRY_ID) return HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+    return RecordOfUnified(es_->Base()[geomID] + primID, t, u, v, occlusion);
+  }
+
+  HitRecord RecordOfUnified(std::uint32_t g, float t, float u, float v, bool occlusion) const
+  {
+    HitRecord h{occlusion ? 0.0f : t, unified_ ? g : primIds_[g], 0.0f, 0.0f};
+    const std::uint32_t nS = static_cast<std::uint32_t>(scene_.spheres.size());
+    const std::uint32_t nT = static_cast<std::uint32_t>(scene_.triangles.size());
+    if (!occlusion && g >= nS && g < nS + nT && (unified_ || (scene_.triangles[g - nS].flags & CR_TRI_REPORT_UV))) {
+      h.u = u;
+      h.v = v;
+    }
+    return h;
+  }
+
+  HitRecord Closest(const RayRecord& rec) const
+  {
+    OccluderContext c;
+    InitContext(c, nullptr, 0);
+    RTCRayHit rh;
+    SetRay(rh.ray, rec);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(es_->Handle(), &c.ctx, &rh);
+    return Record(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v, false);
+  }
+
+  // An occluded ray whose occluder was not recorded: any hit is an occluder.
+  HitRecord LookUpOccluder(const RayRecord& rec) const
+  {
+    ++occluderLookups_;
+    HitRecord h = Closest(rec);
+    if (h.prim != CR_NO_HIT) h.t = 0.0f;
+    return h;
+  }
+
+  HitRecord TraceOne(const RayRecord& rec, bool occlusion) const
+  {
+    if (!occlusion) return Closest(rec);
+    std::uint32_t occluder = CR_NO_HIT;
+    OccluderContext c;
+    InitContext(c, &occluder, 1);
+    RTCRay r;
+    SetRay(r, rec);
+    rtcOccluded1(es_->Handle(), &c.ctx, &r);
+    if (!(r.tfar < 0.0f)) return HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+    if (occluder == CR_NO_HIT) return LookUpOccluder(rec);
+    return RecordOfUnified(occluder, 0.0f, 0.0f, 0.0f, true);
+  }
+
+  void TracePacket(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, std::size_t first,
+                   bool occlusion) const
+  {
+    const std::size_t n = std::min(kPacket, rays.size() - first);
+    alignas(32) int valid[kPacket];
+    alignas(32) RTCRayHit8 rh;
+    for (std::size_t i = 0; i < kPacket; ++i) {
+      const RayRecord& rec = rays[first + (i < n ? i : 0)];
+      valid[i] = i < n ? -1 : 0;
+      rh.ray.org_x[i] = rec.org[0];
+      rh.ray.org_y[i] = rec.org[1];
+      rh.ray.org_z[i] = rec.org[2];
+      rh.ray.tnear[i] = rec.tmin;
+      rh.ray.dir_x[i] = rec.dir[0];
+      rh.ray.dir_y[i] = rec.dir[1];
+      rh.ray.dir_z[i] = rec.dir[2];
+      rh.ray.time[i] = 0.0f;
+      rh.ray.tfar[i] = rec.tmax;
+      rh.ray.mask[i] = 0xFFFFFFFFu;
+      rh.ray.id[i] = static_cast<unsigned>(i);
+      rh.ray.flags[i] = 0;
+      rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    std::uint32_t occluder[kPacket];
+    for (auto& o : occluder) o = CR_NO_HIT;
+    OccluderContext c;
+    InitContext(c, occluder, kPacket);
+    if (!occlusion) {
+      rtcIntersect8(valid, es_->Handle(), &c.ctx, &rh);
+      for (std::size_t i = 0; i < n; ++i)
+        hits[first + i] = Record(rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i], false);
+      return;
+    }
+    rtcOccluded8(valid, es_->Handle(), &c.ctx, &rh.ray);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(rh.ray.tfar[i] < 0.0f))
+        hits[first + i] = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
+      else if (occluder[i] == CR_NO_HIT)
+        hits[first + i] = LookUpOccluder(rays[first + i]);
+      else
+        hits[first + i] = RecordOfUnified(occluder[i], 0.0f, 0.0f, 0.0f, true);
+    }
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Tracer> CreateEmbreeTracer(const Scene& scene, const TraceConfig& config)
+{
+  return std::make_unique<EmbreeTracer>(scene, config);
+}
+
+}  // namespace cr
+
+#endif  // CELLRAY_HAVE_EMBREE

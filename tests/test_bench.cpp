@@ -1,0 +1,173 @@
+// `cellray bench`: the CI-sized run through the real binary (files written,
+// Embree rows present when Embree is, 0 wrong in every robust row), the
+// planning of configurations, the comparison table, and bad input.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "bench/bench_options.h"
+#include "bench/report.h"
+#include "test_util.h"
+
+using namespace cr;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path TempDir(const std::string& name)
+{
+  fs::path d = fs::temp_directory_path() / fmt::format("cellray_bench_{}_{}", name, ::getpid());
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+int RunBinary(const std::string& args, const fs::path& dir, std::string* err = nullptr)
+{
+  const fs::path errPath = dir / "stderr.txt";
+  const std::string cmd =
+      fmt::format("{} {} >{} 2>{}", CELLRAY_BINARY, args, (dir / "stdout.txt").string(), errPath.string());
+  const int status = std::system(cmd.c_str());
+  if (err) {
+    std::ifstream in(errPath);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    *err = ss.str();
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+bool HaveMatplotlib()
+{
+  return std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") == 0 ||
+         std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
+}
+
+}  // namespace
+
+TEST_CASE("bench --quick on one scene: files, Embree rows, 0 wrong in robust rows")
+{
+  const fs::path dir = TempDir("quick");
+  const fs::path out = dir / "out";
+  // OpenCL is left out: a cold program cache would make this test slow; the
+  // OpenCL backends have their own conformance tests.
+  const std::string backends = EmbreeAvailable() ? "simd,scalar,embree" : "simd,scalar";
+  std::string err;
+  const int code = RunBinary(fmt::format("bench --quick {} --backend {} --out {}", test::SpdPath("tetra"), backends,
+                                         out.string()),
+                             dir, &err);
+  INFO("stderr: ", err);
+  REQUIRE(code == 0);
+  REQUIRE(fs::is_regular_file(out / "results.json"));
+  REQUIRE(fs::is_regular_file(out / "results.md"));
+  CHECK(fs::is_regular_file(out / "rays" / "tetra-primary-4096-s1.rays"));
+  if (HaveMatplotlib()) {
+    CHECK(fs::is_regular_file(out / "plots" / "speed_vs_error.png"));
+    CHECK(fs::is_regular_file(out / "plots" / "speed_bars.svg"));
+  } else {
+    MESSAGE("SKIPPED: plots (no python3 with matplotlib)");
+  }
+
+  std::ifstream f(out / "results.json");
+  const nlohmann::json res = nlohmann::json::parse(f);
+  REQUIRE(res["rows"].is_array());
+  CHECK(res["machine"]["cpu_model"].is_string());
+  CHECK(res["command"].get<std::string>().find("bench --quick") != std::string::npos);
+  std::set<std::string> embreeLabels;
+  int robustRows = 0;
+  for (const auto& r : res["rows"]) {
+    INFO(r.dump());
+    CHECK(r["scene"] == "tetra");
+    CHECK(r["rays"].get<std::uint64_t>() > 0);
+    REQUIRE(r["error"].is_object());
+    REQUIRE(r["mrays_per_s"].is_object());
+    CHECK(r["mrays_per_s"]["median"].get<double>() > 0.0);
+    if (r["backend"] == "embree") embreeLabels.insert(r["label"].get<std::string>() + "/" + r["kind"].get<std::string>());
+    if (r["precision"] == "robust") {
+      ++robustRows;
+      CHECK(r["error"]["wrong"] == 0);
+      CHECK(r["per_ray"].is_object());  // statistics run of our backends
+    }
+  }
+  CHECK(robustRows == 6 * 4);  // simd and scalar x grid, octree, bvh x 4 kinds
+  if (EmbreeAvailable()) {
+    for (const char* kind : {"primary", "shadow", "diffuse", "random"}) {
+      CHECK(embreeLabels.count(std::string("embree single/") + kind) == 1);
+      CHECK(embreeLabels.count(std::string("embree packet8/") + kind) == 1);
+    }
+  } else {
+    MESSAGE("SKIPPED: Embree rows (this build has no Embree)");
+  }
+  REQUIRE(res["images"].is_array());
+  CHECK(!res["images"].empty());
+  std::ifstream md(out / "results.md");
+  std::stringstream ss;
+  ss << md.rdbuf();
+  CHECK(ss.str().find("| tetra | primary |") != std::string::npos);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("bench: unknown scenes and backends are bad input")
+{
+  const fs::path dir = TempDir("bad");
+  std::string err;
+  CHECK(RunBinary("bench no_such_scene --out " + (dir / "o").string(), dir, &err) == 2);
+  CHECK(err.find("unknown scene 'no_such_scene'") != std::string::npos);
+  CHECK(RunBinary("bench tetra --backend cuda --out " + (dir / "o").string(), dir, &err) == 2);
+  CHECK(err.find("unknown backend 'cuda'") != std::string::npos);
+  CHECK(RunBinary("bench tetra --kinds sideways --out " + (dir / "o").string(), dir, &err) == 2);
+  fs::remove_all(dir);
+}
+
+TEST_CASE("bench: configurations planned by default and from lists")
+{
+  bench::BenchOptions o;
+  const auto all = bench::PlanCombos(o, true, true);
+  std::set<std::string> labels;
+  for (const auto& c : all) labels.insert(c.Label());
+  for (const char* l : {"simd grid", "simd octree", "simd bvh", "opencl grid", "opencl bvh", "scalar bvh fast",
+                        "scalar bvh fp64", "simd bvh fast", "opencl bvh fp64"})
+    CHECK(labels.count(l) == 1);
+  CHECK(labels.count("embree packet8") == (EmbreeAvailable() ? 1u : 0u));
+  CHECK(labels.count("embree single robust") == (EmbreeAvailable() ? 1u : 0u));
+
+  // Without OpenCL or fp64 on the device, those rows are not planned.
+  for (const auto& c : bench::PlanCombos(o, false, false)) CHECK(c.backend != Backend::OpenCL);
+  for (const auto& c : bench::PlanCombos(o, false, true))
+    CHECK_FALSE((c.backend == Backend::OpenCL && c.precision == Precision::Fp64));
+
+  // Explicit lists: their cross product, modes a backend lacks left out.
+  o.backends = {Backend::Simd, Backend::Scalar};
+  o.accels = {AccelKind::BVH};
+  o.precisions = {Precision::Fast, Precision::Fp64};
+  std::set<std::string> got;
+  for (const auto& c : bench::PlanCombos(o, true, true)) got.insert(c.Label());
+  CHECK(got == std::set<std::string>{"simd bvh fast", "scalar bvh fast", "scalar bvh fp64"});
+}
+
+TEST_CASE("bench: ours against Embree, ratio of speeds")
+{
+  auto row = [](const char* backend, const char* label, const char* kind, double mrays) {
+    return nlohmann::json{{"scene", "balls"},   {"kind", kind},     {"backend", backend},
+                          {"label", label},     {"precision", std::string(backend) == "embree" ? "embree" : "robust"},
+                          {"mrays_per_s", {{"median", mrays}, {"min", mrays}, {"max", mrays}}}};
+  };
+  nlohmann::json rows = nlohmann::json::array();
+  rows.push_back(row("simd", "simd bvh", "primary", 12.0));
+  rows.push_back(row("simd", "simd grid", "primary", 3.0));
+  rows.push_back(row("embree", "embree single", "primary", 4.0));
+  rows.push_back(row("embree", "embree packet8", "primary", 8.0));
+  const std::string md = bench::EmbreeComparisonMarkdown(rows, {"primary"});
+  INFO(md);
+  CHECK(md.find("| balls | primary | simd bvh | 12.00 | embree packet8 | 8.00 | 1.50 |") != std::string::npos);
+  nlohmann::json none = nlohmann::json::array({row("simd", "simd bvh", "primary", 1.0)});
+  CHECK(bench::EmbreeComparisonMarkdown(none, {"primary"}).empty());
+}
