@@ -4,7 +4,7 @@ trace it with each structure x backend, and check every answer against the
 fp64 reference. Prints a Markdown table (and JSON lines with --json).
 
   bench/conformance.py [--scenes balls,gears,...|spd|meshes|all] [--accels grid,octree,bvh]
-                       [--backends scalar,...] [--kinds primary,shadow,diffuse,random]
+                       [--backends scalar,simd:sse4,opencl:packet,...] [--kinds primary,shadow,diffuse,random]
                        [--rays 262144] [--bin build/release/bin/cellray]
 
 Shadow rays are checked as occlusion queries. Meshes are read from
@@ -67,8 +67,13 @@ def main():
                 for backend in a.backends.split(","):
                     for accel in a.accels.split(","):
                         hits = os.path.join(tmp, "out.hits")
-                        t = run([a.bin, "trace", path, "--rays", rays, "--accel", accel, "--backend", backend,
-                                 "--precision", a.precision, "-o", hits] + occ)
+                        # BACKEND[:VARIANT_OPTION], e.g. simd:sse4 (--isa) or opencl:packet (--variant)
+                        name, _, opt = backend.partition(":")
+                        extra = []
+                        if opt:
+                            extra = ["--isa" if name == "simd" and opt in ("sse4", "avx2") else "--variant", opt]
+                        t = run([a.bin, "trace", path, "--rays", rays, "--accel", accel, "--backend", name,
+                                 "--precision", a.precision, "-o", hits] + occ + extra)
                         c = run([a.bin, "check", path, "--rays", rays, "--hits", hits] + occ)
                         total_wrong += c["wrong"]
                         print(f"| {os.path.basename(scene)} | {kind} | {nrays} | {accel} | {backend} | {c['agree']} | "

@@ -48,4 +48,8 @@ std::string HardTableMarkdown(const std::vector<HardCaseResult>& results);
 // Markdown list of every case: what it generates and what it expects.
 std::string HardCasesMarkdown();
 
+// The whole report (docs/HARD_CASES.md): the case list, the table, the totals;
+// `command` is the command line that produced it.
+std::string HardReportMarkdown(const std::vector<HardCaseResult>& results, const std::string& command, double seconds);
+
 }  // namespace cr
