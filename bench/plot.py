@@ -207,6 +207,7 @@ def plot_images(res, out):
     b.set_title("render speed against image error", fontsize=9)
     b.grid(True, which="both", alpha=0.3)
     b.legend(fontsize=7)
+    fig.subplots_adjust(wspace=0.32)
     save(fig, out, "images")
 
 
