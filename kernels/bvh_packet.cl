@@ -177,15 +177,7 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
     const int want = in & live;
     for (uint k = 0; k < sState[3]; ++k) {
       {
-        const uint g = refs[sState[2] + k];
-        Ray ray;
-        Hit hit;
-        Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-        Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-        real t, u, v;
-        const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
-        const int took = Packet_Commit(&hit, want & found, t, u, v, g);
-        Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+        const int took = Packet_TestStep(pv, refs[sState[2] + k], want, sRay, sAxes, sHit, sHitG, lid, nLanes);
         live = live & !(took & anyHit);
       }
 #ifdef CR_STATS

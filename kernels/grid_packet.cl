@@ -92,15 +92,7 @@ CR_FUNC void GridPacket_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const 
     {
       const uint next = sRange[lid];
       const int want = (int)sLane[lid] & (next < sRange[nLanes + lid] ? 1 : 0);
-      const uint g = refs[want ? next : 0u];
-      Ray ray;
-      Hit hit;
-      Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-      Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-      real t, u, v;
-      const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
-      const int took = Packet_Commit(&hit, want & found, t, u, v, g);
-      Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+      const int took = Packet_TestStep(pv, refs[want ? next : 0u], want, sRay, sAxes, sHit, sHitG, lid, nLanes);
       sRange[lid] = next + (uint)want;
       sLane[lid] = sLane[lid] & (uint)!(took & anyHit);
 #ifdef CR_STATS

@@ -177,15 +177,7 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
     /* Step 3, once per reference of the leaf (one barrier each). */
     for (uint k = 0; k < sState[8]; ++k) {
       {
-        const uint g = refs[sState[7] + k];
-        Ray ray;
-        Hit hit;
-        Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
-        Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
-        real t, u, v;
-        const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
-        const int took = Packet_Commit(&hit, in & found, t, u, v, g);
-        Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+        const int took = Packet_TestStep(pv, refs[sState[7] + k], in, sRay, sAxes, sHit, sHitG, lid, nLanes);
 #ifdef CR_STATS
         st->nIT += (uint)in;
 #endif

@@ -163,4 +163,21 @@ CR_FUNC int Packet_PrimTest(const PrimView* pv, uint g, const Ray* ray, const Hi
   return found;
 }
 
+/* The primitive-test step every packet traversal runs: the lane's ray and hit
+ * from local memory, primitive g tested, the hit kept when `want` (the lane
+ * asked for this test) and nearer, written back. Returns whether it took. */
+CR_FUNC int Packet_TestStep(const PrimView* pv, uint g, int want, __local const real* sRay,
+                            __local const uint* sAxes, __local real* sHit, __local uint* sHitG, uint lid, uint nLanes)
+{
+  Ray ray;
+  Hit hit;
+  Packet_LoadRay(sRay, sAxes, lid, nLanes, &ray);
+  Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
+  real t, u, v;
+  const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
+  const int took = Packet_Commit(&hit, want & found, t, u, v, g);
+  Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
+  return took;
+}
+
 #endif /* CELLRAY_KERNELS_PACKET_CL */

@@ -271,21 +271,32 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
   }
 }
 
+// The rays at positions [p, p + N) of the job, in job order (the last group
+// padded with its first ray); returns how many are real.
+template <int N>
+CR_SIMD_INLINE int Job_Rays(const KernelJob& job, std::size_t p, const RayRecord* recs[N], std::uint32_t idx[N])
+{
+  const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
+  for (int l = 0; l < count; ++l) {
+    idx[l] = RayIndex(job, p + std::size_t(l));
+    recs[l] = &job.rays[idx[l]];
+  }
+  for (int l = count; l < N; ++l) recs[l] = recs[0];
+  return count;
+}
+
 // The packet of positions p .. p + count - 1 (image tiles when the job says
 // so), tiles of (N/2) x 2 pixels or consecutive
 // positions, see KernelJob.
 template <int N>
 CR_SIMD_INLINE int Packet_Rays(const KernelJob& job, std::size_t p, const RayRecord* recs[N], std::uint32_t idx[N])
 {
+  if (!job.imageWidth || job.order) return Job_Rays<N>(job, p, recs, idx);
   const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
-  if (job.imageWidth && !job.order) {
-    constexpr std::size_t tw = N / 2;
-    const std::size_t w = job.imageWidth, tilesPerRow = w / tw, tile = p / N;
-    const std::size_t base = (tile / tilesPerRow) * 2 * w + (tile % tilesPerRow) * tw;
-    for (int l = 0; l < count; ++l) idx[l] = static_cast<std::uint32_t>(base + std::size_t(l / tw) * w + l % tw);
-  } else {
-    for (int l = 0; l < count; ++l) idx[l] = RayIndex(job, p + std::size_t(l));
-  }
+  constexpr std::size_t tw = N / 2;
+  const std::size_t w = job.imageWidth, tilesPerRow = w / tw, tile = p / N;
+  const std::size_t base = (tile / tilesPerRow) * 2 * w + (tile % tilesPerRow) * tw;
+  for (int l = 0; l < count; ++l) idx[l] = static_cast<std::uint32_t>(base + std::size_t(l / tw) * w + l % tw);
   for (int l = 0; l < count; ++l) recs[l] = &job.rays[idx[l]];
   for (int l = count; l < N; ++l) recs[l] = recs[0];
   return count;
@@ -312,9 +323,11 @@ CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, 
   }
 }
 
-// Traces positions [job.begin, job.end) in packets of N.
-template <int N, unsigned kTypes, bool kFast, bool kStats>
-void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
+// The loop of every packet TraceRange: positions [job.begin, job.end) in
+// packets of N (image tiles when the job is an image), each traced by
+// trace(P, H, lanes, anyHit, st), hits stored.
+template <int N, bool kStats, class TraceFn>
+CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
   StatsSum st;
@@ -325,10 +338,20 @@ void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
-    BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
+    trace(P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
     Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }
   if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+// Traces positions [job.begin, job.end) in packets of N.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
+                                                StatsSum& st) {
+    BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
+  });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -261,38 +261,42 @@ CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>&
   }
 }
 
-// Traces positions [job.begin, job.end) one ray at a time. Rays are prepared
-// N at a time by the packet's vectorised Ray_Init (RayPacket_Init), which
-// has no data-dependent branches, unlike the scalar Ray_Init that an
+// The loop of the single-ray TraceRanges: positions [job.begin, job.end) one
+// ray at a time, each traced by trace(ray, hit, anyHit, st). Rays are
+// prepared N at a time by the packet's vectorised Ray_Init (RayPacket_Init),
+// which has no data-dependent branches, unlike the scalar Ray_Init that an
 // incoherent ray set would make mispredict on every ray.
-template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
-void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+template <int N, bool kStats, class TraceFn>
+CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
   StatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
-    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
     const RayRecord* recs[N];
     std::uint32_t idx[N];
-    for (int l = 0; l < count; ++l) {
-      idx[l] = RayIndex(job, p + std::size_t(l));
-      recs[l] = &job.rays[idx[l]];
-    }
-    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    const int count = Job_Rays<N>(job, p, recs, idx);
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
     Ray rays[N];
     RayPacket_Extract<N>(P, H, rays);
     for (int l = 0; l < count; ++l) {
-      const Ray& ray = rays[l];
       Hit hit;
-      Hit_Init(&hit, &ray);
-      BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, job.occlusion, st);
+      Hit_Init(&hit, &rays[l]);
+      trace(rays[l], hit, job.occlusion, st);
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }
   }
   if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+}
+
+// Traces positions [job.begin, job.end) one ray at a time.
+template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
+void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, StatsSum& st) {
+    BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
+  });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -133,19 +133,10 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void GridPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  const PrimView pv = MakePrimView(sc);
-  StatsSum st;
-  for (std::size_t p = job.begin; p < job.end; p += N) {
-    const RayRecord* recs[N];
-    std::uint32_t idx[N];
-    const int count = Packet_Rays<N>(job, p, recs, idx);
-    RayPacket<N> P;
-    HitPacket<N> H;
-    RayPacket_Init<N>(P, H, recs);
-    GridPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
-    Packet_StoreHits<N>(sc, pv, job, H, idx, count);
-  }
-  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+  Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
+                                                StatsSum& st) {
+    GridPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
+  });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -22,14 +22,9 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
   const GridHeader& g = *sc.grid;
   StatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
-    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
     const RayRecord* recs[N];
     std::uint32_t idx[N];
-    for (int l = 0; l < count; ++l) {
-      idx[l] = RayIndex(job, p + std::size_t(l));
-      recs[l] = &job.rays[idx[l]];
-    }
-    for (int l = count; l < N; ++l) recs[l] = recs[0];
+    const int count = Job_Rays<N>(job, p, recs, idx);
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);

@@ -144,30 +144,9 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void OctreeSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  const PrimView pv = MakePrimView(sc);
-  StatsSum st;
-  for (std::size_t p = job.begin; p < job.end; p += N) {
-    const int count = static_cast<int>(job.end - p < std::size_t(N) ? job.end - p : std::size_t(N));
-    const RayRecord* recs[N];
-    std::uint32_t idx[N];
-    for (int l = 0; l < count; ++l) {
-      idx[l] = RayIndex(job, p + std::size_t(l));
-      recs[l] = &job.rays[idx[l]];
-    }
-    for (int l = count; l < N; ++l) recs[l] = recs[0];
-    RayPacket<N> P;
-    HitPacket<N> H;
-    RayPacket_Init<N>(P, H, recs);
-    Ray rays[N];
-    RayPacket_Extract<N>(P, H, rays);
-    for (int l = 0; l < count; ++l) {
-      Hit hit;
-      Hit_Init(&hit, &rays[l]);
-      OctreeSingle_Trace<kTypes, kFast, kStats>(sc, rays[l], hit, job.occlusion, st);
-      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
-    }
-  }
-  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, StatsSum& st) {
+    OctreeSingle_Trace<kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
+  });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -47,7 +47,11 @@ Backend ResolveAutoBackend(const std::string& deviceSpec)
       if (d.type == "gpu") return Backend::OpenCL;
     return Backend::Simd;
   } catch (const RuntimeError& e) {
-    Warn(fmt::format("no OpenCL platform ({}): using the simd backend", e.what()));
+    const std::string why = e.what();
+    Warn(why.find("no platform found") != std::string::npos
+             ? std::string("no OpenCL platform found (no driver installed, or the ICD loader finds none); using the "
+                           "simd backend")
+             : fmt::format("no OpenCL platform usable ({}); using the simd backend", why));
     return Backend::Simd;
   }
 }
