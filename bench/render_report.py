@@ -104,7 +104,7 @@ def main():
             "| scene | renders | worst pair | worst PSNR between any two | worst PSNR against the reference |",
             "| --- | ---: | --- | ---: | ---: |"]
     for scene, n, (p, x, y), (pr, k) in agree:
-        worst = f"{x[0]}/{x[1]} vs {y[0]}/{y[1]}" if x else "(one render)"
+        worst = "(one render)" if not x else "(all identical)" if p == float("inf") else f"{x[0]}/{x[1]} vs {y[0]}/{y[1]}"
         out.append(f"| {scene} | {n} | {worst} | {p:.1f} | {pr:.1f} ({k[0]}/{k[1]}) |")
     out += ["\n## Images\n", " ".join(f"![{s}](img/spd_{s}.png)" for s in stats), ""]
     with open(a.out + ".tmp", "w") as f:
