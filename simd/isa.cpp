@@ -56,4 +56,12 @@ Isa ParseIsa(const std::string& name)
   return isa;
 }
 
+std::vector<std::string> SupportedVectorIsas()
+{
+  std::vector<std::string> out;
+  for (Isa isa : {Isa::Sse4, Isa::Avx2})
+    if (IsaSupported(isa)) out.push_back(IsaName(isa));
+  return out;
+}
+
 }  // namespace cr::simd

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace cr::simd {
 
@@ -16,5 +17,7 @@ const char* IsaName(Isa isa);
 // "avx2", "sse4", "scalar", or empty for BestIsa(). InputError for an unknown
 // name or an ISA this CPU (or this build) lacks.
 Isa ParseIsa(const std::string& name);
+// The vector ISAs this CPU runs, by name, narrowest first ("sse4", "avx2").
+std::vector<std::string> SupportedVectorIsas();
 
 }  // namespace cr::simd

@@ -19,13 +19,7 @@ const AccelKind kSimdAccels[] = {AccelKind::BVH, AccelKind::Grid, AccelKind::Oct
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 const char* const kVariants[] = {"packet", "single"};
 
-std::vector<std::string> AvailableIsas()
-{
-  std::vector<std::string> out;
-  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back("sse4");
-  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back("avx2");
-  return out;
-}
+std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
 
 std::int64_t UlpDistance(float a, float b)
 {

@@ -27,13 +27,7 @@ namespace {
 const AccelKind kCellAccels[] = {AccelKind::Grid, AccelKind::Octree};
 const char* const kVariants[] = {"packet", "single"};
 
-std::vector<std::string> AvailableIsas()
-{
-  std::vector<std::string> out;
-  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back("sse4");
-  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back("avx2");
-  return out;
-}
+std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
 
 // Random rays inside the structure's box whose origin coordinates are moved,
 // with probability 0.6 each, exactly onto a cell plane (plane(a, u) gives
