@@ -72,6 +72,16 @@ std::vector<HardCaseResult> RunHardSuite(const HardOptions& options)
     results.push_back(std::move(r));
   };
 
+  // A filter that names no case is a typo, not an empty success.
+  for (const std::string& f : options.cases) {
+    bool any = false;
+    for (const hard::CaseSpec& spec : hard::CaseSpecs()) any = any || Selected(spec.name, {f});
+    if (!any) {
+      std::string names;
+      for (const hard::CaseSpec& spec : hard::CaseSpecs()) names += (names.empty() ? "" : ", ") + spec.name;
+      throw InputError(fmt::format("--case '{}' names no hard case (cases: {})", f, names));
+    }
+  }
   for (const hard::CaseSpec& spec : hard::CaseSpecs()) {
     if (!Selected(spec.name, options.cases)) continue;
     std::optional<hard::HardCase> shared;

@@ -67,3 +67,13 @@ TEST_CASE("hard: the report has a row per case and a column per structure x back
   const std::string cases = HardCasesMarkdown();
   for (const hard::CaseSpec& s : hard::CaseSpecs()) CHECK(cases.find("**" + s.name + "**") != std::string::npos);
 }
+
+TEST_CASE("hard: a --case filter that names no case is bad input")
+{
+  HardOptions o;
+  o.quick = true;
+  o.cases = {"no-such-family/"};
+  CHECK_THROWS_AS(RunHardSuite(o), InputError);
+  o.cases = {"leaks/", "no-such-case"};
+  CHECK_THROWS_AS(RunHardSuite(o), InputError);
+}
