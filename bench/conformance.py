@@ -14,11 +14,11 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchlib import ROOT, run
+
 SPD = ["balls", "gears", "jacks", "lattice", "mount", "rings", "shells", "sombrero", "teapot", "tetra", "tree"]
 MESHES = ["bunny", "dragon100k", "igea", "sponza", "sibenik", "conference"]
 
@@ -29,14 +29,6 @@ def scene_path(name):
     if os.path.exists(name):
         return name
     return os.path.join(ROOT, "scenes", "spd", name + ".nff")
-
-
-def run(cmd):
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.stderr.write(" ".join(cmd) + "\n" + p.stderr)
-        raise SystemExit(p.returncode)
-    return json.loads(p.stdout.strip().splitlines()[-1])
 
 
 def main():

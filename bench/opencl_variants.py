@@ -22,20 +22,12 @@ import argparse
 import datetime
 import json
 import os
-import subprocess
 import sys
 import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchlib import ROOT, run
+
 KIND_LABEL = {"primary": "primary (.rays)", "device": "primary (device)", "shadow": "shadow"}
-
-
-def run(cmd):
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.stderr.write(" ".join(cmd) + "\n" + p.stderr)
-        raise SystemExit(p.returncode)
-    return json.loads(p.stdout.strip().splitlines()[-1])
 
 
 def load():

@@ -58,31 +58,15 @@ CR_FUNC void BVHPacket_PublishNode(CR_GLOBAL const BVHNode* nodes, uint ni, __lo
   }
 }
 
-/* Box_Intersect (intersect.h) with the same arithmetic, on a box in local
- * memory. */
+/* Box_Slabs (intersect.h) of a box in local memory (min corner, then max). */
 CR_FUNC int BVHPacket_Box(__local const float* box, const Ray* r, real tmin, real tmax)
 {
-  real tn = tmin, tf = tmax;
-  real boxFar = (real)CR_INF;
-  real boxNear = -(real)CR_INF;
+  real lo[3], hi[3], tEnter;
   CR_UNROLL for (int a = 0; a < 3; ++a) {
-    real lo = ((real)box[a] - r->org[a]) * r->inv[a];
-    real hi = ((real)box[3 + a] - r->org[a]) * r->inv[a];
-    real n = r->inv[a] < (real)0.0f ? hi : lo;
-    real f = r->inv[a] < (real)0.0f ? lo : hi;
-    boxNear = fmax(boxNear, n);
-    boxFar = fmin(boxFar, f);
+    lo[a] = (real)box[a];
+    hi[a] = (real)box[3 + a];
   }
-#ifndef CR_FAST
-#ifdef CR_FP64
-  boxFar = boxFar * (real)1.0000000000000007;
-#else
-  boxFar = boxFar * 1.0000004f;
-#endif
-#endif
-  tn = fmax(tn, boxNear);
-  tf = fmin(tf, boxFar);
-  return tn <= tf;
+  return Box_Slabs(lo, hi, r, tmin, tmax, &tEnter);
 }
 
 /* Closest or any hit of each lane's ray, already stored in sRay, sAxes, sHit,

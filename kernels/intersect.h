@@ -319,16 +319,17 @@ CR_FUNC real Cull_Distance(real t)
 /* Conservative slab test of a box against [tmin, tmax] (Williams et al. 2005
  * with Ize 2013's rounding: the far distance is scaled by 1 + 2 gamma(3) so
  * that rounding can never cull a box the exact ray enters). 0 * inf = NaN on
- * a plane-parallel ray is dropped by fmin/fmax. Writes the entry distance. */
-CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bmax, const Ray* r, real tmin, real tmax,
-                          real* tEnter)
+ * a plane-parallel ray is dropped by fmin/fmax. The corners come as private
+ * values, so that boxes in any address space share it. Writes the entry
+ * distance. */
+CR_FUNC int Box_Slabs(const real lo3[3], const real hi3[3], const Ray* r, real tmin, real tmax, real* tEnter)
 {
   real tn = tmin, tf = tmax;
   real boxFar = (real)CR_INF;
   real boxNear = -(real)CR_INF;
   CR_UNROLL for (int a = 0; a < 3; ++a) {
-    real lo = ((real)bmin[a] - r->org[a]) * r->inv[a];
-    real hi = ((real)bmax[a] - r->org[a]) * r->inv[a];
+    real lo = (lo3[a] - r->org[a]) * r->inv[a];
+    real hi = (hi3[a] - r->org[a]) * r->inv[a];
     real n = r->inv[a] < (real)0.0f ? hi : lo;
     real f = r->inv[a] < (real)0.0f ? lo : hi;
     boxNear = fmax(boxNear, n);
@@ -345,6 +346,18 @@ CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bm
   tf = fmin(tf, boxFar);
   *tEnter = tn;
   return tn <= tf;
+}
+
+/* Box_Slabs of a box in global memory. */
+CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bmax, const Ray* r, real tmin, real tmax,
+                          real* tEnter)
+{
+  real lo[3], hi[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    lo[a] = (real)bmin[a];
+    hi[a] = (real)bmax[a];
+  }
+  return Box_Slabs(lo, hi, r, tmin, tmax, tEnter);
 }
 
 /* The .hits record of a finished query: closest hit (t, prim id, u, v) or

@@ -167,27 +167,37 @@ CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceSt
 
 #if !defined(CR_VARIANT_PACKET)
 
-/* One ray through the structure the build (or `accel`) selects. */
+/* Ray record i through the structure the build (or `accel`) selects; its
+ * answer to hits[i], its counters to stats (when counted). anyHitArg and
+ * unifiedArg are read only by a generic build (CR_QUERY_*). */
 CR_FUNC void Trace_One(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
                        CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart,
                        CR_GLOBAL const uint* gridRefs, CR_GLOBAL const OctreeHeader* octree,
                        CR_GLOBAL const OctreeNode* octNodes, CR_GLOBAL const uint* octRefs, int accel,
-                       const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+                       CR_GLOBAL const uint* primIds, int anyHitArg, int unifiedArg, const RayRecord* rec, uint i,
+                       CR_GLOBAL HitRecord* hits, CR_GLOBAL TraceStats* stats)
 {
+  Ray ray;
+  Ray_Init(&ray, rec);
+  Hit hit;
+  Hit_Init(&hit, &ray);
+  TraceStats st = {0, 0, 0, 0};
 #if defined(CR_ACCEL_BVH)
-  BVH_Trace(bvhNodes, bvhRefs, pv, ray, hit, anyHit, st);
+  BVH_Trace(bvhNodes, bvhRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
 #elif defined(CR_ACCEL_GRID)
-  Grid_Trace(grid, cellStart, gridRefs, pv, ray, hit, anyHit, st);
+  Grid_Trace(grid, cellStart, gridRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
 #elif defined(CR_ACCEL_OCTREE)
-  Octree_Trace(octree, octNodes, octRefs, pv, ray, hit, anyHit, st);
+  Octree_Trace(octree, octNodes, octRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
 #else
   if (accel == CR_ACCEL_ARG_BVH)
-    BVH_Trace(bvhNodes, bvhRefs, pv, ray, hit, anyHit, st);
+    BVH_Trace(bvhNodes, bvhRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
   else if (accel == CR_ACCEL_ARG_GRID)
-    Grid_Trace(grid, cellStart, gridRefs, pv, ray, hit, anyHit, st);
+    Grid_Trace(grid, cellStart, gridRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
   else
-    Octree_Trace(octree, octNodes, octRefs, pv, ray, hit, anyHit, st);
+    Octree_Trace(octree, octNodes, octRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
 #endif
+  Trace_StoreHit(hits, i, Hit_ToRecord(&hit, pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+  Trace_StoreStats(stats, i, &st);
 }
 
 /* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]. */
@@ -199,14 +209,7 @@ __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint 
   if (i >= nRays) return;
   const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
   const RayRecord rec = Trace_LoadRay(rays, i);
-  Ray ray;
-  Ray_Init(&ray, &rec);
-  Hit hit;
-  Hit_Init(&hit, &ray);
-  TraceStats st = {0, 0, 0, 0};
-  Trace_One(&pv, CR_TRACE_ONE_ARGS, &ray, &hit, CR_QUERY_ANYHIT, &st);
-  Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
-  Trace_StoreStats(stats, i, &st);
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
 }
 
 #endif
@@ -223,14 +226,7 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   const uint i = (uint)py * (uint)width + (uint)px;
   const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, px, py, width, height);
-  Ray ray;
-  Ray_Init(&ray, &rec);
-  Hit hit;
-  Hit_Init(&hit, &ray);
-  TraceStats st = {0, 0, 0, 0};
-  Trace_One(&pv, CR_TRACE_ONE_ARGS, &ray, &hit, CR_QUERY_ANYHIT, &st);
-  Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
-  Trace_StoreStats(stats, i, &st);
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
 }
 
 #endif
