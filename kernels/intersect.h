@@ -53,6 +53,143 @@ CR_FUNC void Quadratic_Roots(real a, real bh, real c, real cScale, real disc, re
   *t1 = fmax(r0, r1);
 }
 
+#if !defined(CR_FAST) && !defined(CR_FP64)
+/* Error-free transformations in float (Knuth's TwoSum; Dekker's TwoProduct
+ * with Veltkamp's split, which needs no FMA, so every device gets the same
+ * bits): a + b = s + e and a b = p + e exactly. */
+CR_FUNC float Ef_TwoSum(float a, float b, float* e)
+{
+  const float s = a + b;
+  const float bb = s - a;
+  *e = (a - (s - bb)) + (b - bb);
+  return s;
+}
+CR_FUNC float Ef_TwoProduct(float a, float b, float* e)
+{
+  const float p = a * b;
+  const float ca = 4097.0f * a, cb = 4097.0f * b;
+  const float ah = ca - (ca - a), bh = cb - (cb - b);
+  const float al = a - ah, bl = b - bh;
+  *e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+  return p;
+}
+/* a b - c d to a few ulps even when the two products cancel. */
+CR_FUNC float Ef_DiffOfProducts(float a, float b, float c, float d)
+{
+  float e1, e2, es;
+  const float p1 = Ef_TwoProduct(a, b, &e1);
+  const float p2 = Ef_TwoProduct(c, d, &e2);
+  const float s = Ef_TwoSum(p1, -p2, &es);
+  return s + (es + (e1 - e2));
+}
+
+/* The sphere's |f x d|^2 in float carries two errors: the products that
+ * cancel in each component (about u |f| |d| each), and f = o - c itself,
+ * rounded to the spacing of the larger coordinate (origin detail finer than
+ * that is lost: a camera jittered by 1e-4 looking at a sphere 1e4 away).
+ * Where |disc| is within a bound E of those errors its sign, hit or miss, is
+ * not decided, and Sphere_DiscExact recomputes the cross product from the
+ * exact o - c (fh + fl, TwoSum) and exact products: error about u |f x d|.
+ * E ~ 3 sqrt(3) u |f| |d| (|f x d| + 3 u |f| |d|) + u a r^2, compared
+ * squared so that no square root is needed, with a factor of 8 to spare:
+ * E^2 <= 2^-29 P (cc + 2^-38 P), P = |f|^2 |d|^2 (the a r^2 term is absorbed:
+ * a r^2 = disc + cc). With Q = 2^-29 P: disc^2 <= Q (cc + 2^-9 Q). Overflow
+ * only errs towards the exact path. Below -2^15 Q (= -2^-14 P) disc is a
+ * certain miss, found before the bound (most tests end there). */
+CR_FUNC int Sphere_DiscUndecided(real disc, real Q, real cc) { return disc * disc <= Q * (cc + 0x1.0p-9f * Q); }
+CR_COLD CR_FUNC real Sphere_DiscExact(const Ray* r, const Sphere* s, const real fh[3], real ar2)
+{
+  real fl[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) Ef_TwoSum(r->org[i], -s->center[i], &fl[i]);
+  const real* d = r->dir;
+  const real cx = Ef_DiffOfProducts(fh[1], d[2], fh[2], d[1]) + (fl[1] * d[2] - fl[2] * d[1]);
+  const real cy = Ef_DiffOfProducts(fh[2], d[0], fh[0], d[2]) + (fl[2] * d[0] - fl[0] * d[2]);
+  const real cz = Ef_DiffOfProducts(fh[0], d[1], fh[1], d[0]) + (fl[0] * d[1] - fl[1] * d[0]);
+  return ar2 - (cx * cx + cy * cy + cz * cz);
+}
+
+/* |a| >= |b| (or a == 0): a + b = s + e exactly. */
+CR_FUNC float Ef_FastTwoSum(float a, float b, float* e)
+{
+  const float s = a + b;
+  *e = b - (s - a);
+  return s;
+}
+
+/* The distance to sphere s that its float test reports (the nearer root,
+ * or the farther when the nearer lies before tmin) as a double-float
+ * hi + lo, for ordering two spheres whose float distances tie exactly: two
+ * surfaces closer along the ray than one ulp of t. f = o - c is exact
+ * (fh + fl), bh = f.d and a = d.d are summed from exact products, and the
+ * roots (-bh -+ sq) / a are divided in double-float. sq, the square root of
+ * Sphere_DiscExact, stays float: its error is u sq, and at a tie between two
+ * surfaces of small far spheres sq is far below |bh|. */
+CR_FUNC void Sphere_TieT(const real org[3], const real dir[3], real tmin, const Sphere* s, real* hi, real* lo)
+{
+  real fh[3], fl[3];
+  real bhH = 0.0f, bhL = 0.0f, aH = 0.0f, aL = 0.0f;
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    fh[i] = Ef_TwoSum(org[i], -s->center[i], &fl[i]);
+    real e, se;
+    real p = Ef_TwoProduct(fh[i], dir[i], &e);
+    bhH = Ef_TwoSum(bhH, p, &se);
+    bhL = bhL + (se + (e + fl[i] * dir[i]));
+    p = Ef_TwoProduct(dir[i], dir[i], &e);
+    aH = Ef_TwoSum(aH, p, &se);
+    aL = aL + (se + e);
+  }
+  bhH = Ef_FastTwoSum(bhH, bhL, &bhL);
+  aH = Ef_FastTwoSum(aH, aL, &aL);
+  const real cx = Ef_DiffOfProducts(fh[1], dir[2], fh[2], dir[1]) + (fl[1] * dir[2] - fl[2] * dir[1]);
+  const real cy = Ef_DiffOfProducts(fh[2], dir[0], fh[0], dir[2]) + (fl[2] * dir[0] - fl[0] * dir[2]);
+  const real cz = Ef_DiffOfProducts(fh[0], dir[1], fh[1], dir[0]) + (fl[0] * dir[1] - fl[1] * dir[0]);
+  const real rad = s->radius;
+  const real disc = aH * rad * rad - (cx * cx + cy * cy + cz * cz);
+  const real sq = disc > 0.0f ? CR_SQRTF(disc) : 0.0f;
+  real nL, qL, pe;
+  for (int root = 0; root < 2; ++root) {
+    /* numerator -bh -+ sq, then the quotient by a */
+    real nH = Ef_TwoSum(-bhH, root == 0 ? -sq : sq, &nL);
+    nL = nL - bhL;
+    nH = Ef_FastTwoSum(nH, nL, &nL);
+    const real qH = nH / aH;
+    const real p = Ef_TwoProduct(qH, aH, &pe);
+    qL = ((((nH - p) - pe) + nL) - qH * aL) / aH;
+    *hi = Ef_FastTwoSum(qH, qL, lo);
+    if (*hi >= tmin) return;
+  }
+}
+
+/* Order of spheres a and b along the ray at a float tie: -1 when a's surface
+ * comes first, 1 when b's, 0 when not even double-float tells them apart. */
+CR_COLD CR_FUNC int Sphere_TieOrder(const real org[3], const real dir[3], real tmin, const Sphere* a, const Sphere* b)
+{
+  real ah, al, bh, bl;
+  Sphere_TieT(org, dir, tmin, a, &ah, &al);
+  Sphere_TieT(org, dir, tmin, b, &bh, &bl);
+  if (ah != bh) return ah < bh ? -1 : 1;
+  if (al != bl) return al < bl ? -1 : 1;
+  return 0;
+}
+#endif
+
+/* Hit_Closer for primitive g met at t by ray r, with one refinement in
+ * robust mode: an exact float tie between two different spheres goes to the
+ * one that double-float arithmetic finds nearer (Sphere_TieOrder); any
+ * other tie to the lower id. */
+CR_FUNC int Hit_CloserOn(const PrimView* pv, const Ray* r, real t, uint g, const Hit* h)
+{
+#if CR_HAS_SPHERES && !defined(CR_FAST) && !defined(CR_FP64)
+  if (t == h->t && g != h->g && g < pv->nSpheres && h->g < pv->nSpheres) {
+    const Sphere a = pv->spheres[g];
+    const Sphere b = pv->spheres[h->g];
+    const int order = Sphere_TieOrder(r->org, r->dir, r->tmin, &a, &b);
+    if (order != 0) return order < 0;
+  }
+#endif
+  return Hit_Closer(t, g, h);
+}
+
 /* The typed tests take the primitive in private memory (a copy), so that a
  * caller may hold it anywhere: global memory (Prim_Intersect), or local
  * memory shared by a work-group (kernels/bvh_packet.cl). */
@@ -82,7 +219,19 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   real cx = f[1] * r->dir[2] - f[2] * r->dir[1];
   real cy = f[2] * r->dir[0] - f[0] * r->dir[2];
   real cz = f[0] * r->dir[1] - f[1] * r->dir[0];
-  real disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
+  real ar2 = a * rad * rad;
+  real cc = cx * cx + cy * cy + cz * cz;
+  real disc = ar2 - cc;
+#ifndef CR_FP64
+  if (disc < (real)0.0f) {
+    const real Q = 0x1.0p-29f * (ff * a);
+    if (disc < -0x1.0p15f * Q || !Sphere_DiscUndecided(disc, Q, cc)) return 0;
+    disc = Sphere_DiscExact(r, s, f, ar2);
+  } else {
+    const real Q = 0x1.0p-29f * (ff * a);
+    if (Sphere_DiscUndecided(disc, Q, cc)) disc = Sphere_DiscExact(r, s, f, ar2);
+  }
+#endif
   if (disc < (real)0.0f) return 0;
   Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1);
 #endif
@@ -267,7 +416,7 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
 
 /* Tests primitive g and keeps the hit if it is closer (Hit_Closer). Returns 1
  * when the hit changed. */
-CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
+CR_FUNC_HOT int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
 {
   real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
   int found = 0;
@@ -289,7 +438,7 @@ CR_FUNC int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hit)
     found = Cone_Intersect(r, &cn, r->tmin, hit->t, &t);
 #endif
   }
-  if (found && Hit_Closer(t, g, hit)) {
+  if (found && Hit_CloserOn(pv, r, t, g, hit)) {
     hit->t = t;
     hit->u = u;
     hit->v = v;

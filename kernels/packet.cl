@@ -81,12 +81,12 @@ CR_FUNC void Packet_LoadHit(__local const real* sHit, __local const uint* sHitG,
   h->g = sHitG[lid];
 }
 
-/* Keeps a candidate hit if the lane wants it and it is closer (Hit_Closer),
+/* Keeps a candidate hit if the lane wants it and it is closer (Hit_CloserOn),
  * with selects rather than branches so that the work-item loop stays
  * straight-line. Returns 1 when the hit changed. */
-CR_FUNC int Packet_Commit(Hit* hit, int want, real t, real u, real v, uint g)
+CR_FUNC int Packet_Commit(const PrimView* pv, const Ray* ray, Hit* hit, int want, real t, real u, real v, uint g)
 {
-  const int take = want & Hit_Closer(t, g, hit);
+  const int take = want & Hit_CloserOn(pv, ray, t, g, hit);
   hit->t = take ? t : hit->t;
   hit->u = take ? u : hit->u;
   hit->v = take ? v : hit->v;
@@ -175,7 +175,7 @@ CR_FUNC int Packet_TestStep(const PrimView* pv, uint g, int want, __local const 
   Packet_LoadHit(sHit, sHitG, lid, nLanes, &hit);
   real t, u, v;
   const int found = Packet_PrimTest(pv, g, &ray, &hit, &t, &u, &v);
-  const int took = Packet_Commit(&hit, want & found, t, u, v, g);
+  const int took = Packet_Commit(pv, &ray, &hit, want & found, t, u, v, g);
   Packet_StoreHit(sHit, sHitG, lid, nLanes, &hit);
   return took;
 }

@@ -31,6 +31,9 @@ CR_FUNC uint cr_popcount(uint x) { return popcount(x); }
 CR_FUNC uint cr_float_bits(float x) { return as_uint(x); }
 CR_FUNC float cr_bits_float(uint x) { return as_float(x); }
 #define cr_isnan(x) isnan(x)
+#define CR_SQRTF(x) sqrt(x)
+#define CR_COLD __attribute__((noinline))
+#define CR_FUNC_HOT static inline
 
 #else /* C++ */
 #include <bit>
@@ -64,6 +67,15 @@ inline int cr_min(int a, int b) { return a < b ? a : b; }
 inline int cr_max(int a, int b) { return a > b ? a : b; }
 inline uint cr_minu(uint a, uint b) { return a < b ? a : b; }
 }  // namespace cr
+/* A float square root that is never an out-of-line std:: function: code
+ * that the SIMD units compile (with their own -m flags) must not define a
+ * weak symbol outside their ISA namespace (docs/SIMD.md). */
+#define CR_SQRTF(x) __builtin_sqrtf(x)
+/* Rarely taken work kept out of the hot loops it is called from, and the
+ * per-primitive step kept inside them (GCC's size heuristics would
+ * otherwise outline it from the grid walk). */
+#define CR_COLD __attribute__((noinline, cold))
+#define CR_FUNC_HOT inline __attribute__((always_inline))
 #endif
 
 /* Before a loop of fixed small trip count (the three axes): unrolled in

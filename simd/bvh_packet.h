@@ -125,9 +125,8 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
   const PrimCounts& c = sc.counts;
   if constexpr (kType == PrimType::Sphere) {
     const Sphere& sp = sc.spheres[g];
-    vfloat<N> f[3];
-    for (int i = 0; i < 3; ++i) f[i] = P.org[i] - vfloat<N>(sp.center[i]);
-    ok = Sphere_IntersectN<kFast, N>(f, P.dir, vfloat<N>(sp.radius), P.tmin, H.t, t);
+    const vfloat<N> cen[3] = {vfloat<N>(sp.center[0]), vfloat<N>(sp.center[1]), vfloat<N>(sp.center[2])};
+    ok = Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, vfloat<N>(sp.radius), P.tmin, H.t, t);
   } else if constexpr (kType == PrimType::Triangle) {
     const Triangle& tri = sc.triangles[g - c.nSpheres];
     if constexpr (kFast) {
@@ -160,7 +159,24 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
     ok = Cone_IntersectN<kFast, N>(dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin, H.t, t);
   }
   const vint<N> gv(static_cast<int>(g));
-  const vbool<N> closer = m & ok & ((t < H.t) | ((t == H.t) & LessUnsigned(gv, H.g)));
+  vbool<N> closer = m & ok & ((t < H.t) | ((t == H.t) & LessUnsigned(gv, H.g)));
+  if constexpr (kType == PrimType::Sphere && !kFast) {
+    // Hit_CloserOn: an exact tie with another sphere goes to the nearer by
+    // double-float distance (rare: resolved lane by lane).
+    const vbool<N> tie = m & ok & (t == H.t) & LessUnsigned(H.g, vint<N>(static_cast<int>(c.nSpheres))) &
+                         !(gv == H.g);
+    if (Any(tie)) {
+      unsigned bits = closer.Bits();
+      for (unsigned rest = tie.Bits(); rest; rest &= rest - 1u) {
+        const int l = LowestBit(rest);
+        const float org[3] = {P.org[0][l], P.org[1][l], P.org[2][l]};
+        const float dir[3] = {P.dir[0][l], P.dir[1][l], P.dir[2][l]};
+        const int order = Sphere_TieOrder(org, dir, P.tmin[l], &sc.spheres[g], &sc.spheres[H.g[l]]);
+        if (order != 0) bits = order < 0 ? bits | (1u << l) : bits & ~(1u << l);
+      }
+      closer = vbool<N>::FromBits(bits);
+    }
+  }
   if (None(closer)) return closer;
   H.t = Select(closer, t, H.t);
   H.u = Select(closer, u, H.u);

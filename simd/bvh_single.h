@@ -46,15 +46,59 @@ CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
   pr.tmin = vfloat<K>(r.tmin);
 }
 
-// Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit changed.
+// The ray of a sphere pack, for Hit_CloserOn's order of spheres whose float
+// distances tie exactly (robust mode; nullptr: no such order, plain
+// Hit_Closer).
+struct SphereTie {
+  float org[3], dir[3], tmin;
+  const Sphere* spheres;
+  std::uint32_t nSpheres;
+};
+
 template <int K>
-CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit)
+CR_SIMD_INLINE SphereTie SphereTie_Of(const KernelScene& sc, const PackRay<K>& pr)
+{
+  SphereTie st;
+  for (int a = 0; a < 3; ++a) {
+    st.org[a] = pr.org[a][0];
+    st.dir[a] = pr.dir[a][0];
+  }
+  st.tmin = pr.tmin[0];
+  st.spheres = sc.spheres;
+  st.nSpheres = sc.counts.nSpheres;
+  return st;
+}
+
+// Hit_CloserOn of kernels/intersect.h for sphere g (tie set) or any
+// primitive (tie null).
+CR_SIMD_INLINE bool Hit_CloserTie(const SphereTie* tie, float t, std::uint32_t g, const Hit& hit)
+{
+  if (tie && t == hit.t && g != hit.g && hit.g < tie->nSpheres) {
+    const int order = Sphere_TieOrder(tie->org, tie->dir, tie->tmin, &tie->spheres[g], &tie->spheres[hit.g]);
+    if (order != 0) return order < 0;
+  }
+  return Hit_Closer(t, g, &hit);
+}
+
+// Keeps the pack's best hit if it is closer (Hit_Closer; Hit_CloserOn's
+// sphere order when tie is set); true when the hit changed.
+template <int K>
+CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit,
+                                const SphereTie* tie = nullptr)
 {
   if (None(ok)) return false;
   const float best = HMin(Select(ok, t, vfloat<K>(__builtin_inff())));
-  const int lane = LowestBit((ok & (t == vfloat<K>(best))).Bits());
+  const unsigned tied = (ok & (t == vfloat<K>(best))).Bits();
+  int lane = LowestBit(tied);
+  if (tie && (tied & (tied - 1u))) {
+    // Several spheres at the same float t: the sequential loop's choice.
+    for (unsigned rest = tied & (tied - 1u); rest; rest &= rest - 1u) {
+      const int l = LowestBit(rest);
+      if (Sphere_TieOrder(tie->org, tie->dir, tie->tmin, &tie->spheres[g[l]], &tie->spheres[g[lane]]) < 0) lane = l;
+    }
+  }
   const std::uint32_t gl = g[lane];
-  if (!Hit_Closer(best, gl, &hit)) return false;
+  if (!Hit_CloserTie(tie, best, gl, hit)) return false;
   hit.t = best;
   hit.u = u[lane];
   hit.v = v[lane];
@@ -81,11 +125,12 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
       const SpherePack<K>& pk = packs[p];
       const vbool<K> valid = Pack_Valid<K>(pk.g);
       if constexpr (kStats) st.nIT += PopCount(valid.Bits());
-      vfloat<K> f[3], t;
-      for (int i = 0; i < 3; ++i) f[i] = pr.org[i] - vfloat<K>::Load(pk.center[i]);
-      const vbool<K> ok =
-          valid & Sphere_IntersectN<kFast, K>(f, pr.dir, vfloat<K>::Load(pk.radius), pr.tmin, vfloat<K>(hit.t), t);
-      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
+      vfloat<K> cen[3], t;
+      for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
+      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, vfloat<K>::Load(pk.radius), pr.tmin,
+                                                             vfloat<K>(hit.t), t);
+      const SphereTie tie = SphereTie_Of<K>(sc, pr);
+      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &tie)) {
         changed = true;
         if (anyHit) return true;
       }

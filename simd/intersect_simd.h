@@ -106,11 +106,58 @@ CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfl
   t1 = FMax(r0, r1);
 }
 
-// Sphere_Intersect: nearest root in [tmin, tmax]. f = org - center.
-template <bool kFast, int N>
-CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> dir[3], vfloat<N> rad, vfloat<N> tmin,
-                                          vfloat<N> tmax, vfloat<N>& tHit)
+// Error-free transformations, lane by lane those of kernels/intersect.h:
+// a + b = s + e and a b = p + e exactly. The product's error comes from one
+// FMA where the ISA has it; it is exact either way, so the bits agree with
+// Dekker's split in the kernels.
+template <int N>
+CR_SIMD_INLINE vfloat<N> Ef_TwoSumN(vfloat<N> a, vfloat<N> b, vfloat<N>& e)
 {
+  const vfloat<N> s = a + b;
+  const vfloat<N> bb = s - a;
+  e = (a - (s - bb)) + (b - bb);
+  return s;
+}
+template <int N>
+CR_SIMD_INLINE vfloat<N> Ef_TwoProductN(vfloat<N> a, vfloat<N> b, vfloat<N>& e)
+{
+  const vfloat<N> p = a * b;
+  e = ProductError(a, b, p);
+  return p;
+}
+template <int N>
+CR_SIMD_INLINE vfloat<N> Ef_DiffOfProductsN(vfloat<N> a, vfloat<N> b, vfloat<N> c, vfloat<N> d)
+{
+  vfloat<N> e1, e2, es;
+  const vfloat<N> p1 = Ef_TwoProductN<N>(a, b, e1);
+  const vfloat<N> p2 = Ef_TwoProductN<N>(c, d, e2);
+  const vfloat<N> s = Ef_TwoSumN<N>(p1, -p2, es);
+  return s + (es + (e1 - e2));
+}
+
+// Sphere_DiscExact: a r^2 - |f x d|^2 from the exact o - c and exact
+// products. Rare, so out of line: the traversal loops keep their registers.
+template <int N>
+__attribute__((noinline, cold)) vfloat<N> Sphere_DiscExactN(const vfloat<N> org[3], const vfloat<N> cen[3],
+                                                           const vfloat<N> dir[3], vfloat<N> ar2)
+{
+  vfloat<N> f[3], fl[3];
+  for (int i = 0; i < 3; ++i) f[i] = Ef_TwoSumN<N>(org[i], -cen[i], fl[i]);
+  const vfloat<N> ex = Ef_DiffOfProductsN<N>(f[1], dir[2], f[2], dir[1]) + (fl[1] * dir[2] - fl[2] * dir[1]);
+  const vfloat<N> ey = Ef_DiffOfProductsN<N>(f[2], dir[0], f[0], dir[2]) + (fl[2] * dir[0] - fl[0] * dir[2]);
+  const vfloat<N> ez = Ef_DiffOfProductsN<N>(f[0], dir[1], f[1], dir[0]) + (fl[0] * dir[1] - fl[1] * dir[0]);
+  return ar2 - (ex * ex + ey * ey + ez * ez);
+}
+
+// Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen. Where the
+// float discriminant is within its error bound (Sphere_DiscUndecided), it is
+// recomputed from the exact o - c and exact products (Sphere_DiscExact).
+template <bool kFast, int N>
+CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
+                                          vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
+{
+  vfloat<N> f[3];
+  for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
   const vfloat<N> a = Dot3N<N>(dir, dir);
   const vfloat<N> bh = Dot3N<N>(f, dir);
   const vfloat<N> ff = Dot3N<N>(f, f);
@@ -128,9 +175,19 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> f[3], const vfloat<N> 
     const vfloat<N> cx = f[1] * dir[2] - f[2] * dir[1];
     const vfloat<N> cy = f[2] * dir[0] - f[0] * dir[2];
     const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
-    const vfloat<N> disc = a * rad * rad - (cx * cx + cy * cy + cz * cz);
+    const vfloat<N> ar2 = a * rad * rad;
+    const vfloat<N> cc = cx * cx + cy * cy + cz * cz;
+    vfloat<N> disc = ar2 - cc;
+    const vfloat<N> Q = vfloat<N>(0x1.0p-29f) * (ff * a);
+    // Most tests miss for certain (Sphere_Intersect's -2^15 Q): skip the
+    // bound, the square root and the divisions when all do.
+    if (All(disc < vfloat<N>(-0x1.0p15f) * Q)) {
+      tHit = vfloat<N>(0.0f);
+      return vbool<N>(false);
+    }
+    const vbool<N> undecided = disc * disc <= Q * (cc + vfloat<N>(0x1.0p-9f) * Q);
+    if (Any(undecided)) disc = Select(undecided, Sphere_DiscExactN<N>(org, cen, dir, ar2), disc);
     miss = disc < vfloat<N>(0.0f);
-    // Most tests miss here: skip the square root and divisions when all do.
     if (All(miss)) {
       tHit = vfloat<N>(0.0f);
       return vbool<N>(false);

@@ -109,9 +109,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       for (int l = 0; l < K; ++l) rows[l] = sc.spheres[g[l]].center;
       vfloat<K> s[4];
       LoadTransposed4(rows, s);
-      vfloat<K> f[3];
-      for (int a = 0; a < 3; ++a) f[a] = pr.org[a] - s[a];
-      ok = Sphere_IntersectN<kFast, K>(f, pr.dir, s[3], pr.tmin, vfloat<K>(hit.t), t);
+      ok = Sphere_IntersectN<kFast, K>(pr.org, s, pr.dir, s[3], pr.tmin, vfloat<K>(hit.t), t);
     } else if constexpr (kType == PrimType::Triangle) {
       // Each vertex is a 16-byte row (x, y, z, flags or pad).
       const Triangle* tri[K];
@@ -166,7 +164,12 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       hit.g = g[lane];
       return true;
     }
-    if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit)) changed = true;
+    if constexpr (kType == PrimType::Sphere && !kFast) {
+      const SphereTie tie = SphereTie_Of<K>(sc, pr);
+      if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit, &tie)) changed = true;
+    } else if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit)) {
+      changed = true;
+    }
   }
   return changed;
 }

@@ -80,6 +80,15 @@ CR_SIMD_INLINE vfloat<4> CopySign(vfloat<4> mag, vfloat<4> sgn)
   return vfloat<4>(_mm_or_ps(_mm_andnot_ps(s, mag.v), _mm_and_ps(s, sgn.v)));
 }
 CR_SIMD_INLINE vfloat<4> Sqrt(vfloat<4> a) { return vfloat<4>(_mm_sqrt_ps(a.v)); }
+// a b - p exactly, for p = a b rounded (Dekker's TwoProduct: Veltkamp's
+// split, no FMA on SSE4.1).
+CR_SIMD_INLINE vfloat<4> ProductError(vfloat<4> a, vfloat<4> b, vfloat<4> p)
+{
+  const vfloat<4> ca = vfloat<4>(4097.0f) * a, cb = vfloat<4>(4097.0f) * b;
+  const vfloat<4> ah = ca - (ca - a), bh = cb - (cb - b);
+  const vfloat<4> al = a - ah, bl = b - bh;
+  return ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+}
 // Smallest lane (no NaN lanes expected: callers mask them to +inf first).
 CR_SIMD_INLINE float HMin(vfloat<4> a)
 {

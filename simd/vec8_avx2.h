@@ -75,6 +75,12 @@ CR_SIMD_INLINE vfloat<8> CopySign(vfloat<8> mag, vfloat<8> sgn)
   return vfloat<8>(_mm256_or_ps(_mm256_andnot_ps(s, mag.v), _mm256_and_ps(s, sgn.v)));
 }
 CR_SIMD_INLINE vfloat<8> Sqrt(vfloat<8> a) { return vfloat<8>(_mm256_sqrt_ps(a.v)); }
+// a b - p exactly, for p = a b rounded: one FMA (the same bits as Dekker's
+// split, which the kernels use: the error is representable and exact).
+CR_SIMD_INLINE vfloat<8> ProductError(vfloat<8> a, vfloat<8> b, vfloat<8> p)
+{
+  return vfloat<8>(_mm256_fmsub_ps(a.v, b.v, p.v));
+}
 CR_SIMD_INLINE float HMin(vfloat<8> a)
 {
   __m128 m = _mm_min_ps(_mm256_castps256_ps128(a.v), _mm256_extractf128_ps(a.v, 1));

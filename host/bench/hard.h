@@ -34,8 +34,7 @@ struct HardCaseResult {
   std::uint64_t wrong = 0;  // rays whose answer breaks the case's expectation
   std::string note;         // e.g. "skipped: no OpenCL device"
   bool skipped = false;     // the backend or precision is not available here
-  // Held to 0 wrong: robust and fp64, robust only where the case is within
-  // float32 resolution; fast never (reported, not asserted).
+  // Held to 0 wrong: robust and fp64; fast never (reported, not asserted).
   bool required = false;
 };
 

@@ -83,10 +83,6 @@ struct HardCase {
   double relTolT = 0.0;               // Target: relative t tolerance (0: t not judged)
   bool closest = true;
   bool occlusion = true;
-  // False when the rule asks for more than float32 arithmetic can resolve
-  // (fp32Note says why): robust is reported for it, not held to 0; fp64 is.
-  bool fp32Resolvable = true;
-  std::string fp32Note;
   BuildExpect build = BuildExpect::Ok;
   long generatorWarnings = 0;       // cr::WarningCount() growth while the scene was made
   long expectGeneratorWarnings = 0; // at least this many (degenerate input)

@@ -14,10 +14,13 @@
 // data anyone traces. Translation then costs the robust kernel nothing:
 // o - c is exact (Sterbenz) when o and c are floats within a factor 2, so
 // shift-1e5 and shift-1e7 must pass exactly like at-origin.
-// Two cases ask for more than float arithmetic resolves, and are held to 0
-// for fp64 only: origins jittered by less than ulp(|c|) / 2 (o - c in float
-// loses the jitter), and two spheres whose surfaces are closer along the ray
-// than one ulp of t (float t cannot order them).
+// Two cases ask for more than plain float arithmetic resolves: origins
+// jittered by less than ulp(|c|) / 2 (o - c in float loses the jitter), and
+// two spheres whose surfaces are closer along the ray than one ulp of t
+// (float t cannot order them). Robust mode resolves both with error-free
+// transformations (kernels/intersect.h: Sphere_DiscExact where the float
+// discriminant is undecided, Sphere_TieOrder at an exact tie of t), so they
+// are held to 0 like every other case.
 #include <cmath>
 
 #include "bench/hard_gen.h"
@@ -87,9 +90,6 @@ HardCase Jittered(const GenOptions& o)
   c.scene = b.Finish();
   c.expect = Expect::Target;
   c.relTolT = kRelTolT;
-  c.fp32Resolvable = false;
-  c.fp32Note = "origin jitter (< 2.4e-4) below half an ulp of the centre's coordinates (ulp(8000) = 4.9e-4): o - c in "
-               "float drops it";
   const std::size_t perSphere = o.quick ? 200 : 2000;
   for (std::size_t s = 0; s < c.scene->spheres.size(); ++s) {
     const glm::dvec3 dir = D(c.scene->spheres[s].center);
@@ -121,8 +121,6 @@ HardCase BelowUlp(const GenOptions& o)
   c.scene = b.Finish();
   c.expect = Expect::Target;
   c.relTolT = kRelTolT;
-  c.fp32Resolvable = false;
-  c.fp32Note = "the two front surfaces are 5.8e-4 apart along the ray, below ulp(t) = 9.8e-4 at t = 1e4";
   const std::size_t n = o.quick ? 400 : 4000;
   for (std::size_t k = 0; k < n; ++k) {
     const double rho = 0.8 * kRadius * std::sqrt(rng.Uniform()), phi = rng.Uniform(0.0, 6.283185307179586);
@@ -159,13 +157,13 @@ void AddTinyFarCases(std::vector<CaseSpec>& specs)
   specs.push_back({"tiny-far/jittered-origins", "tiny-far",
                    "Camera at the origin jittered perpendicular to the line of sight, directions exactly to the "
                    "centres: by up to 0.9 radii (expect the sphere's id, t within 2^-20) or by 1.5..2.4 radii (expect "
-                   "a miss). Beyond float32: the jitter is below half an ulp of the centres' coordinates (held to 0 "
-                   "for fp64 only).",
+                   "a miss). The jitter is below half an ulp of the centres' coordinates: o - c in float loses it "
+                   "(robust recovers it exactly).",
                    false, [](AccelKind, const GenOptions& o) { return Jittered(o); }});
   specs.push_back({"tiny-far/depth-below-ulp", "tiny-far",
                    "Two spheres on the x axis whose front surfaces are 5.8e-4 apart at distance 1e4 (less than one "
-                   "float ulp of t); the front one has the higher id. Beyond float32. Expect (fp64 only): the front "
-                   "sphere.",
+                   "float ulp of t: their float distances tie); the front one has the higher id. Expect: the front "
+                   "sphere (robust orders the tie in double-float).",
                    false, [](AccelKind, const GenOptions& o) { return BelowUlp(o); }});
 }
 

@@ -1,7 +1,7 @@
 // Shared by the hard-case tests: runs cases of the suite (bench/hard.h) on
 // every structure x backend x precision available here and asserts 0 wrong
-// rays for every required combination (robust and fp64; robust only within
-// float32 resolution), reporting fast's counts without asserting them.
+// rays for every required combination (robust and fp64), reporting fast's
+// counts without asserting them.
 #pragma once
 
 #include <cstdio>

@@ -40,7 +40,7 @@ TEST_CASE("hard: axis-parallel and near-axis rays (+-0, +-1e-30, +-1e-7, subnorm
 
 TEST_CASE("hard: tiny spheres far away, at the origin and translated by 1e5 and 1e7")
 {
-  const auto results = hard_test::RunAndCheck("tiny-far/");
+  hard_test::RunAndCheck("tiny-far/");
   // The translated scenes really are at 1e5 and 1e7, with radius 1e-4 at 1e4.
   for (const char* name : {"tiny-far/at-origin", "tiny-far/shift-1e5", "tiny-far/shift-1e7"}) {
     const hard::HardCase c = Make(name);
@@ -56,12 +56,6 @@ TEST_CASE("hard: tiny spheres far away, at the origin and translated by 1e5 and 
       CHECK(d == doctest::Approx(1e4).epsilon(1e-3));
     }
   }
-  // The two cases beyond float32 resolution: fp64 holds them (asserted
-  // above); robust is reported.
-  for (const auto& r : results)
-    if (!r.skipped && r.precision == Precision::Robust && !r.required)
-      MESSAGE("beyond float32 (reported): ", r.caseName, " ", std::string(AccelKindName(r.accel)), " ",
-              std::string(BackendName(r.backend)), " robust: ", r.wrong, " wrong of ", r.rays);
 }
 
 TEST_CASE("hard: grazing rays on spheres, cylinders, cones and in the planes of polygons")
