@@ -97,15 +97,20 @@ CR_FUNC float Ef_DiffOfProducts(float a, float b, float c, float d)
  * only errs towards the exact path. Below -2^15 Q (= -2^-14 P) disc is a
  * certain miss, found before the bound (most tests end there). */
 CR_FUNC int Sphere_DiscUndecided(real disc, real Q, real cc) { return disc * disc <= Q * (cc + 0x1.0p-9f * Q); }
-CR_COLD CR_FUNC real Sphere_DiscExact(const Ray* r, const Sphere* s, const real fh[3], real ar2)
+/* a r^2 - |f x d|^2 with f = fh + fl exact: each component of the cross
+ * product from exact products (Ef_DiffOfProducts) plus the small fl terms. */
+CR_FUNC real Sphere_DiscOfExactF(const real fh[3], const real fl[3], const real d[3], real ar2)
 {
-  real fl[3];
-  CR_UNROLL for (int i = 0; i < 3; ++i) Ef_TwoSum(r->org[i], -s->center[i], &fl[i]);
-  const real* d = r->dir;
   const real cx = Ef_DiffOfProducts(fh[1], d[2], fh[2], d[1]) + (fl[1] * d[2] - fl[2] * d[1]);
   const real cy = Ef_DiffOfProducts(fh[2], d[0], fh[0], d[2]) + (fl[2] * d[0] - fl[0] * d[2]);
   const real cz = Ef_DiffOfProducts(fh[0], d[1], fh[1], d[0]) + (fl[0] * d[1] - fl[1] * d[0]);
   return ar2 - (cx * cx + cy * cy + cz * cz);
+}
+CR_COLD CR_FUNC real Sphere_DiscExact(const Ray* r, const Sphere* s, const real fh[3], real ar2)
+{
+  real fl[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) Ef_TwoSum(r->org[i], -s->center[i], &fl[i]);
+  return Sphere_DiscOfExactF(fh, fl, r->dir, ar2);
 }
 
 /* |a| >= |b| (or a == 0): a + b = s + e exactly. */
@@ -140,11 +145,7 @@ CR_FUNC void Sphere_TieT(const real org[3], const real dir[3], real tmin, const 
   }
   bhH = Ef_FastTwoSum(bhH, bhL, &bhL);
   aH = Ef_FastTwoSum(aH, aL, &aL);
-  const real cx = Ef_DiffOfProducts(fh[1], dir[2], fh[2], dir[1]) + (fl[1] * dir[2] - fl[2] * dir[1]);
-  const real cy = Ef_DiffOfProducts(fh[2], dir[0], fh[0], dir[2]) + (fl[2] * dir[0] - fl[0] * dir[2]);
-  const real cz = Ef_DiffOfProducts(fh[0], dir[1], fh[1], dir[0]) + (fl[0] * dir[1] - fl[1] * dir[0]);
-  const real rad = s->radius;
-  const real disc = aH * rad * rad - (cx * cx + cy * cy + cz * cz);
+  const real disc = Sphere_DiscOfExactF(fh, fl, dir, aH * s->radius * s->radius);
   const real sq = disc > 0.0f ? CR_SQRTF(disc) : 0.0f;
   real nL, qL, pe;
   for (int root = 0; root < 2; ++root) {
