@@ -13,7 +13,7 @@
 #include <fmt/format.h>
 
 #include "micro_common.h"
-#include "simd/bvh_wide_builder.h"
+#include "simd/probe_scene.h"
 #include "simd/isa.h"
 #include "simd/simd_kernels.h"
 
@@ -27,30 +27,20 @@ using simd::ProbeResult;
 constexpr int kRays = 1024;
 
 // One primitive of each type at the origin (the scalar benchmarks' shapes).
-struct ProbeScene {
-  Scene scene;
-  std::vector<simd::ConeData> cones;
-  std::vector<std::uint32_t> ids;
-  simd::KernelScene sc;
-  ProbeScene()
+struct MicroScene : simd::ProbeScene {
+  MicroScene()
   {
     scene.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f});
     scene.triangles.push_back(
         Triangle{{-1.0f, -1.0f, 0.0f}, CR_TRI_REPORT_UV, {1.0f, -1.0f, 0.0f}, 0u, {0.0f, 1.0f, 0.0f}, 0u});
     scene.cones.push_back(Cone{{0.0f, 0.0f, -1.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 0.5f});
-    cones = simd::MakeConeData(scene);
-    ids = {0, 1, 2};
-    sc.spheres = scene.spheres.data();
-    sc.triangles = scene.triangles.data();
-    sc.cones = cones.data();
-    sc.counts = scene.Counts();
-    sc.primIds = ids.data();
+    Finish();
   }
 };
 
-const ProbeScene& Probe()
+const simd::ProbeScene& Probe()
 {
-  static const ProbeScene p;
+  static const MicroScene p;
   return p;
 }
 
@@ -68,7 +58,7 @@ RayRecord MiddleRay(std::uint32_t g)
 void CountBoth(const KernelProbes& pr, std::uint32_t g, bool fast, const std::vector<RayRecord>& rays, int& packet,
                int& single)
 {
-  const ProbeScene& ps = Probe();
+  const simd::ProbeScene& ps = Probe();
   std::vector<ProbeResult> out(std::size_t(pr.width)), pout(std::size_t(pr.packWidth));
   packet = single = 0;
   for (std::size_t i = 0; i + std::size_t(pr.width) <= rays.size(); i += std::size_t(pr.width)) {

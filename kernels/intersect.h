@@ -224,14 +224,9 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   real cc = cx * cx + cy * cy + cz * cz;
   real disc = ar2 - cc;
 #ifndef CR_FP64
-  if (disc < (real)0.0f) {
-    const real Q = 0x1.0p-29f * (ff * a);
-    if (disc < -0x1.0p15f * Q || !Sphere_DiscUndecided(disc, Q, cc)) return 0;
-    disc = Sphere_DiscExact(r, s, f, ar2);
-  } else {
-    const real Q = 0x1.0p-29f * (ff * a);
-    if (Sphere_DiscUndecided(disc, Q, cc)) disc = Sphere_DiscExact(r, s, f, ar2);
-  }
+  const real Q = 0x1.0p-29f * (ff * a);
+  if (disc < -0x1.0p15f * Q) return 0;
+  if (Sphere_DiscUndecided(disc, Q, cc)) disc = Sphere_DiscExact(r, s, f, ar2);
 #endif
   if (disc < (real)0.0f) return 0;
   Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1);

@@ -46,59 +46,43 @@ CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
   pr.tmin = vfloat<K>(r.tmin);
 }
 
-// The ray of a sphere pack, for Hit_CloserOn's order of spheres whose float
-// distances tie exactly (robust mode; nullptr: no such order, plain
-// Hit_Closer).
-struct SphereTie {
-  float org[3], dir[3], tmin;
-  const Sphere* spheres;
-  std::uint32_t nSpheres;
-};
-
+// Hit_CloserOn's order of two spheres whose float distances tie exactly
+// (robust mode), for the ray of the pack: -1 when sphere ga comes first.
 template <int K>
-CR_SIMD_INLINE SphereTie SphereTie_Of(const KernelScene& sc, const PackRay<K>& pr)
+CR_SIMD_INLINE int Pack_SphereTieOrder(const KernelScene& sc, const PackRay<K>& pr, std::uint32_t ga,
+                                       std::uint32_t gb)
 {
-  SphereTie st;
-  for (int a = 0; a < 3; ++a) {
-    st.org[a] = pr.org[a][0];
-    st.dir[a] = pr.dir[a][0];
-  }
-  st.tmin = pr.tmin[0];
-  st.spheres = sc.spheres;
-  st.nSpheres = sc.counts.nSpheres;
-  return st;
+  const float org[3] = {pr.org[0][0], pr.org[1][0], pr.org[2][0]};
+  const float dir[3] = {pr.dir[0][0], pr.dir[1][0], pr.dir[2][0]};
+  return Sphere_TieOrder(org, dir, pr.tmin[0], &sc.spheres[ga], &sc.spheres[gb]);
 }
 
-// Hit_CloserOn of kernels/intersect.h for sphere g (tie set) or any
-// primitive (tie null).
-CR_SIMD_INLINE bool Hit_CloserTie(const SphereTie* tie, float t, std::uint32_t g, const Hit& hit)
-{
-  if (tie && t == hit.t && g != hit.g && hit.g < tie->nSpheres) {
-    const int order = Sphere_TieOrder(tie->org, tie->dir, tie->tmin, &tie->spheres[g], &tie->spheres[hit.g]);
-    if (order != 0) return order < 0;
-  }
-  return Hit_Closer(t, g, &hit);
-}
-
-// Keeps the pack's best hit if it is closer (Hit_Closer; Hit_CloserOn's
-// sphere order when tie is set); true when the hit changed.
+// Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit
+// changed. With `tieScene` set (a sphere pack in robust mode), ties between
+// spheres follow Hit_CloserOn: double-float distance first, then id.
 template <int K>
 CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit,
-                                const SphereTie* tie = nullptr)
+                                const KernelScene* tieScene = nullptr, const PackRay<K>* tieRay = nullptr)
 {
   if (None(ok)) return false;
   const float best = HMin(Select(ok, t, vfloat<K>(__builtin_inff())));
   const unsigned tied = (ok & (t == vfloat<K>(best))).Bits();
   int lane = LowestBit(tied);
-  if (tie && (tied & (tied - 1u))) {
-    // Several spheres at the same float t: the sequential loop's choice.
+  // Several spheres at the same float t: the sequential loop's choice.
+  if (tieScene)
     for (unsigned rest = tied & (tied - 1u); rest; rest &= rest - 1u) {
       const int l = LowestBit(rest);
-      if (Sphere_TieOrder(tie->org, tie->dir, tie->tmin, &tie->spheres[g[l]], &tie->spheres[g[lane]]) < 0) lane = l;
+      if (Pack_SphereTieOrder<K>(*tieScene, *tieRay, g[l], g[lane]) < 0) lane = l;
     }
-  }
   const std::uint32_t gl = g[lane];
-  if (!Hit_CloserTie(tie, best, gl, hit)) return false;
+  bool closer;
+  if (tieScene && best == hit.t && gl != hit.g && hit.g < tieScene->counts.nSpheres) {
+    const int order = Pack_SphereTieOrder<K>(*tieScene, *tieRay, gl, hit.g);
+    closer = order != 0 ? order < 0 : gl < hit.g;
+  } else {
+    closer = Hit_Closer(best, gl, &hit);
+  }
+  if (!closer) return false;
   hit.t = best;
   hit.u = u[lane];
   hit.v = v[lane];
@@ -129,8 +113,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
       for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
       const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, vfloat<K>::Load(pk.radius), pr.tmin,
                                                              vfloat<K>(hit.t), t);
-      const SphereTie tie = SphereTie_Of<K>(sc, pr);
-      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &tie)) {
+      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &sc, &pr)) {
         changed = true;
         if (anyHit) return true;
       }

@@ -164,12 +164,8 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       hit.g = g[lane];
       return true;
     }
-    if constexpr (kType == PrimType::Sphere && !kFast) {
-      const SphereTie tie = SphereTie_Of<K>(sc, pr);
-      if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit, &tie)) changed = true;
-    } else if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit)) {
-      changed = true;
-    }
+    constexpr bool kSphereTies = kType == PrimType::Sphere && !kFast;
+    if (Pack_Reduce<K>(valid & ok, t, u, v, g, hit, kSphereTies ? &sc : nullptr, &pr)) changed = true;
   }
   return changed;
 }

@@ -15,7 +15,7 @@
 #include <fmt/format.h>
 
 #include "scene/scene.h"
-#include "simd/bvh_wide_builder.h"
+#include "simd/probe_scene.h"
 #include "simd/isa.h"
 #include "simd/simd_kernels.h"
 
@@ -53,13 +53,8 @@ std::uint32_t Bits(float x)
 
 // The test scene: two triangles sharing the diagonal of the unit square,
 // spheres, cylinders and cones, including degenerate ones.
-struct ProbeScene {
-  Scene scene;
-  std::vector<simd::ConeData> cones;
-  std::vector<std::uint32_t> ids;
-  simd::KernelScene sc;
-
-  ProbeScene()
+struct TestScene : simd::ProbeScene {
+  TestScene()
   {
     scene.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f});
     scene.spheres.push_back(Sphere{{3.0f, 0.5f, -2.0f}, 0.25f});
@@ -76,19 +71,12 @@ struct ProbeScene {
     scene.cones.push_back(Cone{{0.0f, 0.0f, 0.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 0.0f});   // cone to a point
     scene.cones.push_back(Cone{{1.0f, 2.0f, 3.0f}, 0.5f, {2.0f, 1.0f, 5.0f}, 0.25f});  // oblique frustum
     scene.cones.push_back(Cone{{1.0f, 1.0f, 1.0f}, 0.5f, {1.0f, 1.0f, 1.0f}, 0.5f});   // H = 0
-    cones = simd::MakeConeData(scene);
-    ids.resize(scene.NumUnified());
-    for (std::uint32_t g = 0; g < ids.size(); ++g) ids[g] = g;
-    sc.spheres = scene.spheres.data();
-    sc.triangles = scene.triangles.data();
-    sc.cones = cones.data();
-    sc.counts = scene.Counts();
-    sc.primIds = ids.data();
+    Finish();
   }
 };
 
 // Prim_Intersect of the scalar kernels from a fresh hit at the ray's tmax.
-ProbeResult ScalarPrim(const ProbeScene& ps, const RayRecord& rec, std::uint32_t g, bool fast)
+ProbeResult ScalarPrim(const simd::ProbeScene& ps, const RayRecord& rec, std::uint32_t g, bool fast)
 {
   ProbeResult out;
   if (fast) {
@@ -162,7 +150,7 @@ void Compare(const ProbeResult& want, const ProbeResult& got, bool compareUV, Ta
 }
 
 // Every ray against primitives [gBegin, gEnd) in both forms.
-Tally ProbePrims(const KernelProbes& pr, const ProbeScene& ps, const std::vector<RayRecord>& rays, std::uint32_t gBegin,
+Tally ProbePrims(const KernelProbes& pr, const simd::ProbeScene& ps, const std::vector<RayRecord>& rays, std::uint32_t gBegin,
                  std::uint32_t gEnd, bool fast)
 {
   Tally tally;
@@ -228,7 +216,7 @@ std::vector<RayRecord> RaysAround(float cx, float cy, float cz, float size, int 
 
 TEST_CASE("simd intersectors: shared triangle edge and vertex, signed-zero directions (watertight)")
 {
-  ProbeScene ps;
+  TestScene ps;
   const std::uint32_t t0 = ps.sc.counts.nSpheres, tEnd = t0 + ps.sc.counts.nTriangles;
   std::vector<RayRecord> rays;
   // Straight down onto the shared diagonal x = y and the shared vertices,
@@ -270,7 +258,7 @@ TEST_CASE("simd intersectors: shared triangle edge and vertex, signed-zero direc
 
 TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
 {
-  ProbeScene ps;
+  TestScene ps;
   const float up = std::nextafter(1.0f, 2.0f), down = std::nextafter(1.0f, 0.0f);
   std::vector<RayRecord> rays;
   for (float y : {1.0f, up, down, -1.0f, 0.0f})
@@ -296,7 +284,7 @@ TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
 
 TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerate cones")
 {
-  ProbeScene ps;
+  TestScene ps;
   const std::uint32_t c0 = ps.sc.counts.nSpheres + ps.sc.counts.nTriangles, cEnd = c0 + ps.sc.counts.nCones;
   std::vector<RayRecord> rays;
   for (float z0 : {0.0f, -0.0f}) {
@@ -320,7 +308,7 @@ TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerat
 
 TEST_CASE("simd intersectors: seeded random rays around every primitive")
 {
-  ProbeScene ps;
+  TestScene ps;
   const PrimCounts c = ps.sc.counts;
   struct Group {
     std::uint32_t begin, end;
