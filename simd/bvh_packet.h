@@ -23,10 +23,15 @@ struct RayPacket {
   vfloat<N> org[3], dir[3], inv[3];
   vbool<N> invNeg[3];  // inv < 0: the near plane is bmax
   vfloat<N> tmin;
+  vfloat<N> dd;       // d.d, for the sphere test
   vfloat<N> s[3];     // shear constants sx, sy, sz
   vint<N> k[3];       // kx, ky, kz
   vint<N> sel[3];     // ComponentSelector of kx, ky, kz
   vfloat<N> orgK[3];  // org[kx], org[ky], org[kz]
+  // When every lane has the same kx, ky, kz (coherent packets), they are
+  // kScalar, and triangle tests broadcast components instead of permuting.
+  bool kUniform;
+  int kScalar[3];
   // When every lane has the same direction signs (coherent packets), the
   // near plane of axis a is node float nearOff[a] for all lanes (bmin[a] or
   // bmax[a] as BVHNode lays them out), and the per-lane plane choice is skipped.
@@ -62,6 +67,7 @@ CR_SIMD_INLINE void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const RayRe
     p.invNeg[a] = p.inv[a] < vfloat<N>(0.0f);
   }
   p.tmin = c[3];
+  p.dd = Dot3N<N>(p.dir, p.dir);
   h.t = c[7];
   h.u = vfloat<N>(0.0f);
   h.v = vfloat<N>(0.0f);
@@ -87,6 +93,12 @@ CR_SIMD_INLINE void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const RayRe
   for (int j = 0; j < 3; ++j) {
     p.sel[j] = ComponentSelector(p.k[j]);
     p.orgK[j] = pick(org, p.k[j]);
+  }
+  p.kUniform = true;
+  for (int j = 0; j < 3; ++j) {
+    const int first = static_cast<int>(p.k[j][0]);
+    p.kScalar[j] = first;
+    p.kUniform = p.kUniform && All(p.k[j] == vint<N>(first));
   }
   p.sameSigns = true;
   for (int a = 0; a < 3; ++a) {
@@ -126,7 +138,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
   if constexpr (kType == PrimType::Sphere) {
     const Sphere& sp = sc.spheres[g];
     const vfloat<N> cen[3] = {vfloat<N>(sp.center[0]), vfloat<N>(sp.center[1]), vfloat<N>(sp.center[2])};
-    ok = Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, vfloat<N>(sp.radius), P.tmin, H.t, t);
+    ok = Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, P.dd, vfloat<N>(sp.radius), P.tmin, H.t, t);
   } else if constexpr (kType == PrimType::Triangle) {
     const Triangle& tri = sc.triangles[g - c.nSpheres];
     if constexpr (kFast) {
@@ -138,16 +150,24 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
       }
       ok = Triangle_MollerTrumboreN<N>(v0, v1, v2, P.org, P.dir, P.tmin, H.t, t, u, v);
     } else {
-      vfloat<N> A[3], B[3], C[3], w0[3], w1[3], w2[3];
-      for (int j = 0; j < 3; ++j) {
-        A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
-        B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
-        C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
-        w0[j] = vfloat<N>(tri.v0[j]);
-        w1[j] = vfloat<N>(tri.v1[j]);
-        w2[j] = vfloat<N>(tri.v2[j]);
+      vfloat<N> A[3], B[3], C[3];
+      if (P.kUniform) {
+        // Every lane has the same axis permutation (coherent packets): the
+        // permuted components are plain broadcasts.
+        for (int j = 0; j < 3; ++j) {
+          A[j] = vfloat<N>(tri.v0[P.kScalar[j]]) - P.orgK[j];
+          B[j] = vfloat<N>(tri.v1[P.kScalar[j]]) - P.orgK[j];
+          C[j] = vfloat<N>(tri.v2[P.kScalar[j]]) - P.orgK[j];
+        }
+      } else {
+        for (int j = 0; j < 3; ++j) {
+          A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
+          B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
+          C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
+        }
       }
-      ok = Triangle_WatertightN<N>(A, B, C, P.s, w0, w1, w2, P.org, P.dir, P.tmin, H.t, t, u, v);
+      ok = Triangle_WatertightN<N>(A, B, C, P.s, BroadcastVerts<N>(tri.v0, tri.v1, tri.v2), P.org, P.dir, P.tmin, H.t,
+                                   t, u, v);
     }
   } else {
     const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];

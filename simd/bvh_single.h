@@ -26,6 +26,7 @@ struct PackRay {
   vfloat<K> orgK[3];  // org[kx], org[ky], org[kz]
   vfloat<K> s[3];
   vfloat<K> tmin;
+  vfloat<K> dd;  // d.d, for the sphere test
   int k[3];
 };
 
@@ -44,6 +45,7 @@ CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
   pr.s[1] = vfloat<K>(r.sy);
   pr.s[2] = vfloat<K>(r.sz);
   pr.tmin = vfloat<K>(r.tmin);
+  pr.dd = Dot3N<K>(pr.dir, pr.dir);
 }
 
 // Hit_CloserOn's order of two spheres whose float distances tie exactly
@@ -111,7 +113,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
       if constexpr (kStats) st.nIT += PopCount(valid.Bits());
       vfloat<K> cen[3], t;
       for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
-      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, vfloat<K>::Load(pk.radius), pr.tmin,
+      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius), pr.tmin,
                                                              vfloat<K>(hit.t), t);
       if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &sc, &pr)) {
         changed = true;
@@ -136,16 +138,13 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
         }
         ok = Triangle_MollerTrumboreN<K>(v0, v1, v2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
       } else {
-        vfloat<K> A[3], B[3], C[3], w0[3], w1[3], w2[3];
+        vfloat<K> A[3], B[3], C[3];
         for (int j = 0; j < 3; ++j) {
           A[j] = vfloat<K>::Load(pk.v[0][pr.k[j]]) - pr.orgK[j];
           B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
           C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
-          w0[j] = vfloat<K>::Load(pk.v[0][j]);
-          w1[j] = vfloat<K>::Load(pk.v[1][j]);
-          w2[j] = vfloat<K>::Load(pk.v[2][j]);
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, w0, w1, w2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackVerts<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
       }
       if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
         changed = true;

@@ -72,36 +72,27 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
       const vint<N> next = exitPlane[a] + step[a];
       cand[a] = flatAxis[a] ? planeT(a, next) : (GridPlaneN<N>(g, a, next) - P.org[a]) * P.inv[a];
     }
-    // The reference ranges of the lanes' cells; most cells are empty, and
-    // the lanes of a coherent packet often stand in one cell.
-    alignas(32) std::uint32_t idxs[N];
-    idx.Store(idxs);
+    // The reference ranges of the lanes' cells, gathered for all lanes at
+    // once: most cells are empty, and that test is well predicted, where a
+    // test for "all lanes in one cell" first was not (measured: 3-7% slower).
+    const vint<N> safeIdx = Select(live, idx, vint<N>(0));  // lanes that are not live read cell 0
+    vint<N> begin, end;
+    GatherPairs(cellStart, safeIdx, begin, end);
+    const vbool<N> full = AndNot(live, begin == end);
+    if constexpr (kStats) st.nEmptyLeaves += PopCount(AndNot(live, full).Bits());
     unsigned done = 0;  // occlusion: lanes with an occluder
-    const std::uint32_t c0 = idxs[LowestBit(liveBits)];
-    if ((liveBits & ~(idx == vint<N>(static_cast<int>(c0))).Bits()) == 0) {
-      const std::uint32_t begin = cellStart[c0], end = cellStart[c0 + 1];
-      if (begin == end) {
-        if constexpr (kStats) st.nEmptyLeaves += PopCount(liveBits);
-      } else {
-        PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, live, anyHit, done, st);
-      }
-    } else {
-      const vint<N> safeIdx = Select(live, idx, vint<N>(0));  // lanes that are not live read cell 0
-      vint<N> begin, end;
-      GatherPairs(cellStart, safeIdx, begin, end);
-      const vbool<N> full = AndNot(live, begin == end);
-      if constexpr (kStats) st.nEmptyLeaves += PopCount(AndNot(live, full).Bits());
-      if (Any(full)) {
-        alignas(32) std::uint32_t begins[N], ends[N];
-        begin.Store(begins);
-        end.Store(ends);
-        // One pass over each occupied cell, for all the lanes that stand in it.
-        for (unsigned pending = full.Bits(); pending;) {
-          const int l = LowestBit(pending);
-          const vbool<N> m = full & (idx == vint<N>(static_cast<int>(idxs[l])));
-          pending &= ~m.Bits();
-          PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begins[l], ends[l], P, H, m, anyHit, done, st);
-        }
+    if (Any(full)) {
+      alignas(32) std::uint32_t idxs[N], begins[N], ends[N];
+      idx.Store(idxs);
+      begin.Store(begins);
+      end.Store(ends);
+      // One pass over each occupied cell, for all the lanes that stand in it
+      // (the lanes of a coherent packet often stand in one).
+      for (unsigned pending = full.Bits(); pending;) {
+        const int l = LowestBit(pending);
+        const vbool<N> m = full & (idx == vint<N>(static_cast<int>(idxs[l])));
+        pending &= ~m.Bits();
+        PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begins[l], ends[l], P, H, m, anyHit, done, st);
       }
     }
     if (done) {

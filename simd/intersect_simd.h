@@ -149,16 +149,16 @@ __attribute__((noinline, cold)) vfloat<N> Sphere_DiscExactN(const vfloat<N> org[
   return ar2 - (ex * ex + ey * ey + ez * ez);
 }
 
-// Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen. Where the
-// float discriminant is within its error bound (Sphere_DiscUndecided), it is
+// Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen; a = d.d
+// (Dot3N(dir, dir), computed once per ray by the caller). Where the float
+// discriminant is within its error bound (Sphere_DiscUndecided), it is
 // recomputed from the exact o - c and exact products (Sphere_DiscExact).
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
-                                          vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
+                                          vfloat<N> a, vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
 {
   vfloat<N> f[3];
   for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
-  const vfloat<N> a = Dot3N<N>(dir, dir);
   const vfloat<N> bh = Dot3N<N>(f, dir);
   const vfloat<N> ff = Dot3N<N>(f, f);
   const vfloat<N> c = ff - rad * rad;
@@ -236,15 +236,54 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   return Dot3N<N>(n, p) / nd;
 }
 
+// Vertex sources for Triangle_WatertightN: vectors already in registers (a
+// transposed group), a TrianglePack's [vertex][axis][lane] floats, or one
+// triangle's three vertices broadcast to every lane (packets).
+template <int N>
+CR_SIMD_INLINE auto VecVerts(const vfloat<N> (&vtx)[3][4])
+{
+  return [&vtx](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
+    for (int i = 0; i < 3; ++i) {
+      v0[i] = vtx[0][i];
+      v1[i] = vtx[1][i];
+      v2[i] = vtx[2][i];
+    }
+  };
+}
+template <int N>
+CR_SIMD_INLINE auto PackVerts(const float (&pv)[3][3][N])
+{
+  return [&pv](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
+    for (int i = 0; i < 3; ++i) {
+      v0[i] = vfloat<N>::Load(pv[0][i]);
+      v1[i] = vfloat<N>::Load(pv[1][i]);
+      v2[i] = vfloat<N>::Load(pv[2][i]);
+    }
+  };
+}
+template <int N>
+CR_SIMD_INLINE auto BroadcastVerts(const float* p0, const float* p1, const float* p2)
+{
+  return [p0, p1, p2](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
+    for (int i = 0; i < 3; ++i) {
+      v0[i] = vfloat<N>(p0[i]);
+      v1[i] = vfloat<N>(p1[i]);
+      v2[i] = vfloat<N>(p2[i]);
+    }
+  };
+}
+
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
-template <int N>
+// verts(v0, v1, v2) fills the vertices in world axis order; it is called
+// only when some lane passes the edge tests (most tests miss before), so
+// the vertices are not loaded or kept in registers for the others.
+template <int N, class VertsFn>
 CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
-                                             const vfloat<N> s[3], const vfloat<N> v0[3], const vfloat<N> v1[3],
-                                             const vfloat<N> v2[3], const vfloat<N> org[3], const vfloat<N> dir[3],
-                                             vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit, vfloat<N>& uHit,
-                                             vfloat<N>& vHit)
+                                             const vfloat<N> s[3], VertsFn&& verts, const vfloat<N> org[3],
+                                             const vfloat<N> dir[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
+                                             vfloat<N>& uHit, vfloat<N>& vHit)
 {
   const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
   const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
@@ -263,6 +302,8 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   }
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
   // axis order, which the sums' rounding depends on).
+  vfloat<N> v0[3], v1[3], v2[3];
+  verts(v0, v1, v2);
   const vfloat<N> t = Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;

@@ -109,7 +109,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       for (int l = 0; l < K; ++l) rows[l] = sc.spheres[g[l]].center;
       vfloat<K> s[4];
       LoadTransposed4(rows, s);
-      ok = Sphere_IntersectN<kFast, K>(pr.org, s, pr.dir, s[3], pr.tmin, vfloat<K>(hit.t), t);
+      ok = Sphere_IntersectN<kFast, K>(pr.org, s, pr.dir, pr.dd, s[3], pr.tmin, vfloat<K>(hit.t), t);
     } else if constexpr (kType == PrimType::Triangle) {
       // Each vertex is a 16-byte row (x, y, z, flags or pad).
       const Triangle* tri[K];
@@ -131,8 +131,8 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
           B[j] = vtx[1][pr.k[j]] - pr.orgK[j];
           C[j] = vtx[2][pr.k[j]] - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, vtx[0], vtx[1], vtx[2], pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t),
-                                     t, u, v);
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, VecVerts<K>(vtx), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
+                                     u, v);
       }
     } else {
       // ConeData rows: (base, H), (w, r0), (k, pad).
