@@ -179,13 +179,16 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
     ok = Cone_IntersectN<kFast, N>(dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin, H.t, t);
   }
   const vint<N> gv(static_cast<int>(g));
-  vbool<N> closer = m & ok & ((t < H.t) | ((t == H.t) & LessUnsigned(gv, H.g)));
-  if constexpr (kType == PrimType::Sphere && !kFast) {
-    // Hit_CloserOn: an exact tie with another sphere goes to the nearer by
-    // double-float distance (rare: resolved lane by lane).
-    const vbool<N> tie = m & ok & (t == H.t) & LessUnsigned(H.g, vint<N>(static_cast<int>(c.nSpheres))) &
-                         !(gv == H.g);
-    if (Any(tie)) {
+  const vbool<N> found = m & ok;
+  vbool<N> closer = found & (t < H.t);
+  // An exact tie in t with the hit so far is rare: resolved off the hot path,
+  // by the lower id (Hit_Closer) or, between two spheres, by double-float
+  // distance (Hit_CloserOn), lane by lane.
+  const vbool<N> tied = found & (t == H.t);
+  if (Any(tied)) [[unlikely]] {
+    closer = closer | (tied & LessUnsigned(gv, H.g));
+    if constexpr (kType == PrimType::Sphere && !kFast) {
+      const vbool<N> tie = tied & LessUnsigned(H.g, vint<N>(static_cast<int>(c.nSpheres))) & !(gv == H.g);
       unsigned bits = closer.Bits();
       for (unsigned rest = tie.Bits(); rest; rest &= rest - 1u) {
         const int l = LowestBit(rest);
