@@ -92,7 +92,7 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
         const int l = LowestBit(pending);
         const vbool<N> m = full & (idx == vint<N>(static_cast<int>(idxs[l])));
         pending &= ~m.Bits();
-        PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begins[l], ends[l], P, H, m, anyHit, done, st);
+        CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begins[l], ends[l], P, H, m, anyHit, done, st);
       }
     }
     if (done) {

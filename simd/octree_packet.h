@@ -94,8 +94,8 @@ CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNod
     if (n.count == 0u) st.nEmptyLeaves += PopCount(lanes);
   }
   unsigned done = 0;
-  if (n.count) PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, P, H,
-                                                              vbool<N>::FromBits(lanes), anyHit, done, st);
+  if (n.count) CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, P, H,
+                                                            vbool<N>::FromBits(lanes), anyHit, done, st);
   return done | (lanes & (H.t <= cx).Bits());
 }
 

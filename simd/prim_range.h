@@ -200,4 +200,60 @@ CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t
   return changed;
 }
 
+// refs[begin, end) against the lanes of m one lane at a time, each with the
+// single-ray form (RayRefs_Intersect, 4 primitives at once): for a cell that
+// few lanes of a packet stand in, this keeps the vector lanes busy where a
+// packet pass would run an N-wide test per primitive for one or two rays.
+// Per lane the answer is the packet pass's (and the scalar loop's).
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
+                                       std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
+                                       int anyHit, unsigned& done, StatsSum& st)
+{
+  for (unsigned bits = m.Bits(); bits; bits &= bits - 1u) {
+    const int l = LowestBit(bits);
+    PackRay<4> pr;
+    for (int a = 0; a < 3; ++a) {
+      pr.org[a] = vfloat<4>(P.org[a][l]);
+      pr.dir[a] = vfloat<4>(P.dir[a][l]);
+      pr.orgK[a] = vfloat<4>(P.orgK[a][l]);
+      pr.s[a] = vfloat<4>(P.s[a][l]);
+      pr.k[a] = static_cast<int>(P.k[a][l]);
+    }
+    pr.tmin = vfloat<4>(P.tmin[l]);
+    pr.dd = vfloat<4>(P.dd[l]);
+    Hit hit;
+    hit.t = H.t[l];
+    hit.u = H.u[l];
+    hit.v = H.v[l];
+    hit.g = H.g[l];
+    if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st)) {
+      const vbool<N> lane = vbool<N>::FromBits(1u << l);
+      H.t = Select(lane, vfloat<N>(hit.t), H.t);
+      H.u = Select(lane, vfloat<N>(hit.u), H.u);
+      H.v = Select(lane, vfloat<N>(hit.v), H.v);
+      H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+      if (anyHit) done |= 1u << l;
+    }
+  }
+}
+
+// The references of a grid cell or octree leaf against the lanes of m that
+// stand in it: lane by lane (LaneRefs_Intersect) when only one or two lanes
+// do and there are four references or more, else one packet pass
+// (PacketRefs_Intersect). Measured on gears (grid) 4-7% faster than packet
+// passes alone. Not where the scene has spheres: their packet test is cheap
+// enough that lane passes lost (balls 2-7% slower).
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void CellRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
+                                       std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
+                                       int anyHit, unsigned& done, StatsSum& st)
+{
+  constexpr bool kLanePasses = !(kTypes & kSphereBit);
+  if (kLanePasses && PopCount(m.Bits()) <= 2 && end - begin >= 4)
+    LaneRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
+  else
+    PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
+}
+
 }  // namespace cr::simd::CR_SIMD_NS
