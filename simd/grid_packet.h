@@ -11,8 +11,10 @@
 //    exit, when it steps out of the grid, or (occlusion) at its first hit.
 // Lanes that stand in the same cell share one pass over its references (the
 // cell's primitives are loaded once for all of them); lanes in different
-// cells take one pass each. Per lane this is the scalar walk step by step,
-// so hits, order of tests and statistics are the scalar backend's.
+// cells take one pass each (one or two lanes in a cell of four references or
+// more: lane by lane, 4 primitives at once, CellRefs_Intersect). Per lane
+// this is the scalar walk step by step, so hits, order of tests and
+// closest-hit statistics are the scalar backend's.
 //
 // Lanes stay busy: on gears and teapot primary rays 88% and 92% of the
 // iterations have all 8 lanes live, so finishing a lone lane with the
