@@ -144,7 +144,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
           B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
           C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackVerts<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
       }
       if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
         changed = true;

@@ -236,52 +236,79 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   return Dot3N<N>(n, p) / nd;
 }
 
-// Vertex sources for Triangle_WatertightN: vectors already in registers (a
-// transposed group), a TrianglePack's [vertex][axis][lane] floats, or one
-// triangle's three vertices broadcast to every lane (packets).
+// Triangle_PlaneTN for one triangle against N rays (packets): the normal
+// depends on the triangle only, so it is computed once, in scalar float
+// arithmetic with the same operations in the same order (no contraction:
+// simd/CMakeLists.txt), which gives every lane Triangle_PlaneTN's bits.
 template <int N>
-CR_SIMD_INLINE auto VecVerts(const vfloat<N> (&vtx)[3][4])
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const float* v0, const float* v1, const float* v2, const vfloat<N> org[3],
+                                           const vfloat<N> dir[3], vbool<N>& miss)
 {
-  return [&vtx](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
-    for (int i = 0; i < 3; ++i) {
-      v0[i] = vtx[0][i];
-      v1[i] = vtx[1][i];
-      v2[i] = vtx[2][i];
-    }
+  float e0[3], e1[3], e2[3];
+  for (int i = 0; i < 3; ++i) {
+    e0[i] = v1[i] - v0[i];
+    e1[i] = v2[i] - v1[i];
+    e2[i] = v0[i] - v2[i];
+  }
+  const float l0 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
+  const float l1 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+  const float l2 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+  const bool k0 = (l0 <= l1) && (l0 <= l2);
+  const bool k1 = (l1 <= l2) && !(l0 <= l1);
+  const float* ea = k0 ? e0 : (k1 ? e1 : e2);
+  const float* eb = k0 ? e1 : (k1 ? e2 : e0);
+  const float* vk = k0 ? v1 : (k1 ? v2 : v0);
+  const vfloat<N> n[3] = {vfloat<N>(ea[1] * eb[2] - ea[2] * eb[1]), vfloat<N>(ea[2] * eb[0] - ea[0] * eb[2]),
+                          vfloat<N>(ea[0] * eb[1] - ea[1] * eb[0])};
+  vfloat<N> p[3];
+  for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
+  const vfloat<N> nd = Dot3N<N>(n, dir);
+  miss = miss | (nd == vfloat<N>(0.0f));
+  return Dot3N<N>(n, p) / nd;
+}
+
+// Plane sources for Triangle_WatertightN, called as plane(org, dir, miss)
+// for the distance to the triangle's plane: vertices already in registers
+// (a transposed group), a TrianglePack's [vertex][axis][lane] floats, or one
+// triangle for every lane (packets).
+template <int N>
+CR_SIMD_INLINE auto VecPlane(const vfloat<N> (&vtx)[3][4])
+{
+  return [&vtx](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
+    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss);
   };
 }
 template <int N>
-CR_SIMD_INLINE auto PackVerts(const float (&pv)[3][3][N])
+CR_SIMD_INLINE auto PackPlane(const float (&pv)[3][3][N])
 {
-  return [&pv](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
+  return [&pv](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
+    vfloat<N> v0[3], v1[3], v2[3];
     for (int i = 0; i < 3; ++i) {
       v0[i] = vfloat<N>::Load(pv[0][i]);
       v1[i] = vfloat<N>::Load(pv[1][i]);
       v2[i] = vfloat<N>::Load(pv[2][i]);
     }
+    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
   };
 }
 template <int N>
-CR_SIMD_INLINE auto BroadcastVerts(const float* p0, const float* p1, const float* p2)
+CR_SIMD_INLINE auto OnePlane(const float* v0, const float* v1, const float* v2)
 {
-  return [p0, p1, p2](vfloat<N>* v0, vfloat<N>* v1, vfloat<N>* v2) {
-    for (int i = 0; i < 3; ++i) {
-      v0[i] = vfloat<N>(p0[i]);
-      v1[i] = vfloat<N>(p1[i]);
-      v2[i] = vfloat<N>(p2[i]);
-    }
+  return [v0, v1, v2](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
+    return Triangle_PlaneT1N<N>(v0, v1, v2, org, dir, miss);
   };
 }
 
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
-// verts(v0, v1, v2) fills the vertices in world axis order; it is called
-// only when some lane passes the edge tests (most tests miss before), so
-// the vertices are not loaded or kept in registers for the others.
-template <int N, class VertsFn>
+// plane(org, dir, miss) gives the distance to the triangle's plane
+// (Triangle_PlaneTN; the plane sources above); it runs only when some lane
+// passes the edge tests (most tests miss before), so the world-order
+// vertices are not loaded or kept in registers for the others.
+template <int N, class PlaneFn>
 CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
-                                             const vfloat<N> s[3], VertsFn&& verts, const vfloat<N> org[3],
+                                             const vfloat<N> s[3], PlaneFn&& plane, const vfloat<N> org[3],
                                              const vfloat<N> dir[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
                                              vfloat<N>& uHit, vfloat<N>& vHit)
 {
@@ -302,9 +329,7 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   }
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
   // axis order, which the sums' rounding depends on).
-  vfloat<N> v0[3], v1[3], v2[3];
-  verts(v0, v1, v2);
-  const vfloat<N> t = Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
+  const vfloat<N> t = plane(org, dir, miss);
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;
   uHit = V * invDet;

@@ -131,7 +131,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
           B[j] = vtx[1][pr.k[j]] - pr.orgK[j];
           C[j] = vtx[2][pr.k[j]] - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, VecVerts<K>(vtx), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, VecPlane<K>(vtx), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
                                      u, v);
       }
     } else {
