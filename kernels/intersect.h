@@ -242,6 +242,38 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   return 0;
 }
 
+/* The normal of the triangle's plane for the robust distance (see
+ * Triangle_Intersect): the cross product of the shortest edge and the next
+ * one, edges from the stored vertices (differences of vertices translated to
+ * the ray origin would carry |v - o| rounding). Returns the index of the
+ * vertex the two edges share (0, 1, 2: v0, v1, v2). */
+CR_FUNC int Triangle_PlaneNormal(const Triangle* tri, real n[3])
+{
+  real e[9];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    e[i] = (real)tri->v1[i] - (real)tri->v0[i];
+    e[3 + i] = (real)tri->v2[i] - (real)tri->v1[i];
+    e[6 + i] = (real)tri->v0[i] - (real)tri->v2[i];
+  }
+  const real l0 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+  const real l1 = e[3] * e[3] + e[4] * e[4] + e[5] * e[5];
+  const real l2 = e[6] * e[6] + e[7] * e[7] + e[8] * e[8];
+  /* k: the shortest edge; k1: its successor. */
+  const int k = (l0 <= l1) ? ((l0 <= l2) ? 0 : 2) : ((l1 <= l2) ? 1 : 2);
+  const int k1 = k == 2 ? 0 : k + 1;
+  real ea[3], eb[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    /* selects, not e[3 * k + i]: an array indexed by a computed value stays
+     * in memory and keeps PoCL from vectorising the packet kernels' test */
+    ea[i] = k == 0 ? e[i] : (k == 1 ? e[3 + i] : e[6 + i]);
+    eb[i] = k1 == 0 ? e[i] : (k1 == 1 ? e[3 + i] : e[6 + i]);
+  }
+  n[0] = ea[1] * eb[2] - ea[2] * eb[1];
+  n[1] = ea[2] * eb[0] - ea[0] * eb[2];
+  n[2] = ea[0] * eb[1] - ea[1] * eb[0];
+  return k1;
+}
+
 /* Triangle: t and barycentrics (u weights v1, v weights v2). */
 CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, real tmax, real* tHit,
                                real* uHit, real* vHit)
@@ -304,31 +336,10 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
    * which meet at about a right angle on a needle, so it is accurate to a
    * few ulps; a zero-area triangle has n = 0 and is never hit. The inside
    * test above is unchanged, so the test stays watertight. */
-  real e[9]; /* from the stored vertices: differences of translated ones would carry |v - o| rounding */
-  CR_UNROLL for (int i = 0; i < 3; ++i) {
-    e[i] = (real)tri->v1[i] - (real)tri->v0[i];
-    e[3 + i] = (real)tri->v2[i] - (real)tri->v1[i];
-    e[6 + i] = (real)tri->v0[i] - (real)tri->v2[i];
-  }
-  const real l0 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-  const real l1 = e[3] * e[3] + e[4] * e[4] + e[5] * e[5];
-  const real l2 = e[6] * e[6] + e[7] * e[7] + e[8] * e[8];
-  /* k: the shortest edge; its successor k1; p: the vertex they share,
-   * relative to the origin. */
-  const int k = (l0 <= l1) ? ((l0 <= l2) ? 0 : 2) : ((l1 <= l2) ? 1 : 2);
-  const int k1 = k == 2 ? 0 : k + 1;
-  real ea[3], eb[3], p[3];
-  CR_UNROLL for (int i = 0; i < 3; ++i) {
-    /* selects, not e[3 * k + i]: an array indexed by a computed value stays
-     * in memory and keeps PoCL from vectorising the packet kernels' test */
-    ea[i] = k == 0 ? e[i] : (k == 1 ? e[3 + i] : e[6 + i]);
-    eb[i] = k1 == 0 ? e[i] : (k1 == 1 ? e[3 + i] : e[6 + i]);
-    p[i] = k == 0 ? B[i] : (k == 1 ? C[i] : A[i]);
-  }
   real n[3];
-  n[0] = ea[1] * eb[2] - ea[2] * eb[1];
-  n[1] = ea[2] * eb[0] - ea[0] * eb[2];
-  n[2] = ea[0] * eb[1] - ea[1] * eb[0];
+  const int shared = Triangle_PlaneNormal(tri, n);
+  real p[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = shared == 1 ? B[i] : (shared == 2 ? C[i] : A[i]);
   const real nd = Dot3(n, r->dir);
   if (nd == (real)0.0f) return 0;
   const real t = Dot3(n, p) / nd;

@@ -166,8 +166,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
           C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
         }
       }
-      ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>(tri.v0, tri.v1, tri.v2), P.org, P.dir, P.tmin, H.t,
-                                   t, u, v);
+      ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>(tri), P.org, P.dir, P.tmin, H.t, t, u, v);
     }
   } else {
     const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];

@@ -237,29 +237,17 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
-// depends on the triangle only, so it is computed once, in scalar float
-// arithmetic with the same operations in the same order (no contraction:
+// depends on the triangle only, so it comes once from the scalar kernels'
+// Triangle_PlaneNormal (the same float operations, no contraction:
 // simd/CMakeLists.txt), which gives every lane Triangle_PlaneTN's bits.
 template <int N>
-CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const float* v0, const float* v1, const float* v2, const vfloat<N> org[3],
-                                           const vfloat<N> dir[3], vbool<N>& miss)
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> org[3], const vfloat<N> dir[3],
+                                           vbool<N>& miss)
 {
-  float e0[3], e1[3], e2[3];
-  for (int i = 0; i < 3; ++i) {
-    e0[i] = v1[i] - v0[i];
-    e1[i] = v2[i] - v1[i];
-    e2[i] = v0[i] - v2[i];
-  }
-  const float l0 = e0[0] * e0[0] + e0[1] * e0[1] + e0[2] * e0[2];
-  const float l1 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
-  const float l2 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
-  const bool k0 = (l0 <= l1) && (l0 <= l2);
-  const bool k1 = (l1 <= l2) && !(l0 <= l1);
-  const float* ea = k0 ? e0 : (k1 ? e1 : e2);
-  const float* eb = k0 ? e1 : (k1 ? e2 : e0);
-  const float* vk = k0 ? v1 : (k1 ? v2 : v0);
-  const vfloat<N> n[3] = {vfloat<N>(ea[1] * eb[2] - ea[2] * eb[1]), vfloat<N>(ea[2] * eb[0] - ea[0] * eb[2]),
-                          vfloat<N>(ea[0] * eb[1] - ea[1] * eb[0])};
+  float nf[3];
+  const int shared = Triangle_PlaneNormal(&tri, nf);
+  const float* vk = shared == 0 ? tri.v0 : (shared == 1 ? tri.v1 : tri.v2);
+  const vfloat<N> n[3] = {vfloat<N>(nf[0]), vfloat<N>(nf[1]), vfloat<N>(nf[2])};
   vfloat<N> p[3];
   for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
   const vfloat<N> nd = Dot3N<N>(n, dir);
@@ -292,10 +280,10 @@ CR_SIMD_INLINE auto PackPlane(const float (&pv)[3][3][N])
   };
 }
 template <int N>
-CR_SIMD_INLINE auto OnePlane(const float* v0, const float* v1, const float* v2)
+CR_SIMD_INLINE auto OnePlane(const Triangle& tri)
 {
-  return [v0, v1, v2](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
-    return Triangle_PlaneT1N<N>(v0, v1, v2, org, dir, miss);
+  return [&tri](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
+    return Triangle_PlaneT1N<N>(tri, org, dir, miss);
   };
 }
 
