@@ -103,21 +103,25 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
     }
     // Exit face: the smallest crossing; on a tie x wins over y and z, and y
     // over z (the scalar loop's strict <). No crossing is NaN (PlaneTN).
-    const vfloat<N> t01 = Min(tNext[0], tNext[1]);
-    const vfloat<N> tExit = Min(t01, tNext[2]);
+    // Every lane steps, the ones that stop here too: a lane that is not live
+    // is never read again (its cell index is masked off the gather), so the
+    // step needs no live mask, and the chain of dependent operations from
+    // one crossing to the next is the choice of the axis and one blend; the
+    // three axes' choices exclude each other, so their updates are
+    // independent.
+    const vfloat<N> tExit = Min(Min(tNext[0], tNext[1]), tNext[2]);
     vbool<N> s[3];
-    s[2] = tNext[2] < t01;
+    s[2] = (tNext[2] < tNext[0]) & (tNext[2] < tNext[1]);
     s[1] = AndNot(tNext[1] < tNext[0], s[2]);
     s[0] = !(s[1] | s[2]);
-    live = AndNot(live, H.t <= tExit);
-    if (None(live)) return;
+    vbool<N> out = H.t <= tExit;
     for (int a = 0; a < 3; ++a) {
-      const vbool<N> sa = live & s[a];
-      exitPlane[a] = exitPlane[a] + MaskedOrZero(sa, step[a]);
-      idx = idx + MaskedOrZero(sa, dIdx[a]);
-      tNext[a] = Select(sa, cand[a], tNext[a]);
-      live = AndNot(live, sa & (exitPlane[a] == limit[a]));
+      exitPlane[a] = exitPlane[a] + MaskedOrZero(s[a], step[a]);
+      idx = idx + MaskedOrZero(s[a], dIdx[a]);
+      tNext[a] = Select(s[a], cand[a], tNext[a]);
+      out = out | (s[a] & (exitPlane[a] == limit[a]));
     }
+    live = AndNot(live, out);
     if (None(live)) return;
   }
 }
