@@ -113,8 +113,8 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
       if constexpr (kStats) st.nIT += PopCount(valid.Bits());
       vfloat<K> cen[3], t;
       for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
-      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius), pr.tmin,
-                                                             vfloat<K>(hit.t), t);
+      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius),
+                                                             pr.tmin, vfloat<K>(hit.t), t);
       if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &sc, &pr)) {
         changed = true;
         if (anyHit) return true;
@@ -144,7 +144,8 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
           B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
           C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
+                                     u, v);
       }
       if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
         changed = true;
