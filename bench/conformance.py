@@ -45,8 +45,8 @@ def main():
     scenes = {"spd": SPD, "meshes": MESHES, "all": SPD + MESHES}.get(a.scenes, a.scenes.split(","))
     side = int(math.ceil(math.sqrt(a.rays)))
     total_wrong = 0
-    print("| scene | kind | rays | accel | backend | agree | ties | wrong | max rel t err | Mrays/s |")
-    print("| --- | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: |")
+    print("| scene | kind | rays | accel | backend | agree | ties | flips | wrong | max rel t err | Mrays/s |")
+    print("| --- | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     with tempfile.TemporaryDirectory(prefix="cellray_conf_") as tmp:
         for scene in scenes:
             path = scene_path(scene)
@@ -69,7 +69,7 @@ def main():
                         c = run([a.bin, "check", path, "--rays", rays, "--hits", hits] + occ)
                         total_wrong += c["wrong"]
                         print(f"| {os.path.basename(scene)} | {kind} | {nrays} | {accel} | {backend} | {c['agree']} | "
-                              f"{c['ties']} | {c['wrong']} | {c['max_rel_t_err']:.2e} | {t['mrays_per_s']:.2f} |",
+                              f"{c['ties']} | {c['flips']} | {c['wrong']} | {c['max_rel_t_err']:.2e} | {t['mrays_per_s']:.2f} |",
                               flush=True)
                         if a.json:
                             print(json.dumps({"scene": scene, "kind": kind, "accel": accel, "backend": backend,

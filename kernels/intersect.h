@@ -43,10 +43,11 @@ typedef struct {
  * a "root" anywhere along the ray. Its error eps cScale / |q| is then
  * compared with the error eps |q| / a of the direct form (sqrt - bh) / a,
  * and the smaller wins (with a margin of 16 in favour of Vieta). */
-CR_FUNC void Quadratic_Roots(real a, real bh, real c, real cScale, real disc, real* t0, real* t1)
+CR_FUNC void Quadratic_Roots(real a, real bh, real c, real cScale, real disc, real* t0, real* t1, real* qOut)
 {
   real sq = copysign(sqrt(disc), bh);
   real q = -(bh + sq);
+  *qOut = q;
   real r0 = q / a;
   real r1 = ((real)16.0f * q * q >= a * cScale) ? c / q : (sq - bh) / a;
   *t0 = fmin(r0, r1);
@@ -172,6 +173,299 @@ CR_COLD CR_FUNC int Sphere_TieOrder(const real org[3], const real dir[3], real t
   if (al != bl) return al < bl ? -1 : 1;
   return 0;
 }
+
+/* Double-float arithmetic: a value hi + lo with |lo| <= ulp(hi) / 2, about
+ * 48 bits, built from the error-free transformations above, so every device
+ * and the SIMD backend get the same bits. Used where float cannot give t to
+ * a few ulps: huge primitives seen from nearby (a sphere of radius 1e6 used
+ * as a ground: |f|^2 - r^2 loses 16 bits; a triangle 1e6 across: its
+ * vertices lie 5e5 from a hit 100 away). Each operation is written so that
+ * swapping its operands gives the same bits (the watertight edge functions
+ * rely on Cx By - Cy Bx being the exact negation of By Cx - Bx Cy). */
+typedef struct {
+  float hi;
+  float lo;
+} Df;
+CR_FUNC Df Df_Norm(float s, float e)
+{
+  Df r;
+  r.hi = Ef_FastTwoSum(s, e, &r.lo);
+  return r;
+}
+CR_FUNC Df Df_F(float a)
+{
+  Df r;
+  r.hi = a;
+  r.lo = 0.0f;
+  return r;
+}
+CR_FUNC Df Df_Neg(Df a)
+{
+  a.hi = -a.hi;
+  a.lo = -a.lo;
+  return a;
+}
+/* a + b and a b of two floats, exactly. */
+CR_FUNC Df Df_SumF(float a, float b)
+{
+  Df r;
+  r.hi = Ef_TwoSum(a, b, &r.lo);
+  return r;
+}
+CR_FUNC Df Df_ProdF(float a, float b)
+{
+  Df r;
+  r.hi = Ef_TwoProduct(a, b, &r.lo);
+  return r;
+}
+CR_FUNC Df Df_Add(Df a, Df b)
+{
+  float e;
+  const float s = Ef_TwoSum(a.hi, b.hi, &e);
+  return Df_Norm(s, e + (a.lo + b.lo));
+}
+CR_FUNC Df Df_Sub(Df a, Df b) { return Df_Add(a, Df_Neg(b)); }
+CR_FUNC Df Df_Mul(Df a, Df b)
+{
+  float e;
+  const float p = Ef_TwoProduct(a.hi, b.hi, &e);
+  return Df_Norm(p, e + (a.hi * b.lo + a.lo * b.hi));
+}
+CR_FUNC Df Df_MulF(Df a, float b)
+{
+  float e;
+  const float p = Ef_TwoProduct(a.hi, b, &e);
+  return Df_Norm(p, e + a.lo * b);
+}
+CR_FUNC Df Df_Div(Df a, Df b)
+{
+  const float q1 = a.hi / b.hi;
+  const Df r = Df_Sub(a, Df_MulF(b, q1));
+  return Df_Norm(q1, r.hi / b.hi);
+}
+CR_FUNC Df Df_Sqrt(Df a)
+{
+  if (!(a.hi > 0.0f)) return Df_F(0.0f);
+  const float s = CR_SQRTF(a.hi);
+  float e;
+  const float p = Ef_TwoProduct(s, s, &e);
+  return Df_Norm(s, (((a.hi - p) - e) + a.lo) / (2.0f * s));
+}
+/* a x b and a . b of vectors held as double-floats. */
+CR_FUNC Df Df_Dot3(const Df a[3], const Df b[3])
+{
+  return Df_Add(Df_Add(Df_Mul(a[0], b[0]), Df_Mul(a[1], b[1])), Df_Mul(a[2], b[2]));
+}
+CR_FUNC Df Df_Dot3F(const Df a[3], const real b[3])
+{
+  return Df_Add(Df_Add(Df_MulF(a[0], b[0]), Df_MulF(a[1], b[1])), Df_MulF(a[2], b[2]));
+}
+CR_FUNC void Df_Cross(const Df a[3], const Df b[3], Df c[3])
+{
+  c[0] = Df_Sub(Df_Mul(a[1], b[2]), Df_Mul(a[2], b[1]));
+  c[1] = Df_Sub(Df_Mul(a[2], b[0]), Df_Mul(a[0], b[2]));
+  c[2] = Df_Sub(Df_Mul(a[0], b[1]), Df_Mul(a[1], b[0]));
+}
+/* Roots of a t^2 + 2 bh t + c = 0 in double-float given disc >= 0, as float
+ * (the nearest float to hi + lo is hi), smaller first. */
+CR_FUNC void Df_QuadraticRoots(Df a, Df bh, Df c, Df disc, real* t0, real* t1)
+{
+  Df sq = Df_Sqrt(disc);
+  if (bh.hi < 0.0f) sq = Df_Neg(sq);
+  const Df q = Df_Neg(Df_Add(bh, sq));
+  const real r0 = Df_Div(q, a).hi;
+  const real r1 = q.hi != 0.0f ? Df_Div(c, q).hi : r0;
+  *t0 = fmin(r0, r1);
+  *t1 = fmax(r0, r1);
+}
+
+/* When the float roots of Sphere_Intersect or Cone_Intersect may be off by
+ * more than a few ulps, and one of them may lie in [tmin, tmax]. Off: c
+ * cancels (cScale > 8 |c|: the origin near the surface relative to its
+ * distance from the centre, as under a ground sphere), or q = -(bh +-
+ * sqrt(disc)) carries the error of a discriminant that cancels (dScale > 8
+ * sqrt(disc) (|bh| + sqrt(disc)), compared squared, conservatively, without
+ * the root). May lie in range: the roots widened by what they can be off,
+ * a quarter of t (q's error is below 1/16 unless dScale exceeds 2^18 times
+ * the same measure, when the test is always redone) plus c's own error
+ * carried by the Vieta root c/q (2^-18 cScale / |q|, generously). */
+CR_FUNC int Quadratic_NeedsDf(real c, real cScale, real bh, real disc, real dScale, real q, real t0, real t1,
+                              real tmin, real tmax)
+{
+  const real dd = disc * (bh * bh + disc);
+  if (!(cScale > 8.0f * fabs(c) || dScale * dScale > 64.0f * dd)) return 0;
+  if (dScale * dScale > 0x1.0p36f * dd) return 1;
+  const real slack = 0.25f * fmax(fabs(t0), fabs(t1)) + 0x1.0p-18f * cScale / fabs(q);
+  return t1 + slack >= tmin && t0 - slack <= tmax;
+}
+/* Quadratic_NeedsDf for a cone, or o - base much longer than its radial part
+ * oR (a long cone seen from beside its middle: oR carries the rounding of
+ * o - base, relatively |dl| / |oR| ulps; always redone past 2^18). */
+CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real dScale, real q, real dl2, real oo, real t0,
+                         real t1, real tmin, real tmax)
+{
+  if (Quadratic_NeedsDf(C, cScale, Bh, disc, dScale, q, t0, t1, tmin, tmax)) return 1;
+  if (!(dl2 > 64.0f * oo)) return 0;
+  if (dl2 > 0x1.0p36f * oo) return 1;
+  const real slack = 0.25f * fmax(fabs(t0), fabs(t1));
+  return t1 + slack >= tmin && t0 - slack <= tmax;
+}
+
+/* Sphere_Intersect in double-float from the exact o - c: the cold path for
+ * Quadratic_NeedsDf. Returns 1 with the root in [tmin, tmax] nearest. */
+CR_COLD CR_FUNC int Sphere_IntersectDf(const real org[3], const real dir[3], const Sphere* s, real tmin, real tmax,
+                                       real* tHit)
+{
+  Df f[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) f[i] = Df_SumF(org[i], -s->center[i]);
+  const Df a = Df_Add(Df_Add(Df_ProdF(dir[0], dir[0]), Df_ProdF(dir[1], dir[1])), Df_ProdF(dir[2], dir[2]));
+  const Df bh = Df_Dot3F(f, dir);
+  const Df r2 = Df_ProdF(s->radius, s->radius);
+  const Df c = Df_Sub(Df_Dot3(f, f), r2);
+  Df x[3];
+  x[0] = Df_Sub(Df_MulF(f[1], dir[2]), Df_MulF(f[2], dir[1]));
+  x[1] = Df_Sub(Df_MulF(f[2], dir[0]), Df_MulF(f[0], dir[2]));
+  x[2] = Df_Sub(Df_MulF(f[0], dir[1]), Df_MulF(f[1], dir[0]));
+  const Df disc = Df_Sub(Df_Mul(a, r2), Df_Dot3(x, x));
+  if (disc.hi < 0.0f) return 0;
+  real t0, t1;
+  Df_QuadraticRoots(a, bh, c, disc, &t0, &t1);
+  if (t0 >= tmin && t0 <= tmax) {
+    *tHit = t0;
+    return 1;
+  }
+  if (t1 >= tmin && t1 <= tmax) {
+    *tHit = t1;
+    return 1;
+  }
+  return 0;
+}
+
+/* The distance to the triangle's plane in double-float, from the exact edges
+ * v1 - v0, v2 - v0 and the exact v0 - o: the cold path of Triangle_Intersect
+ * when n . p cancels (a vertex far from the ray origin relative to the
+ * plane's distance: a huge triangle seen from nearby, or a grazing view). */
+CR_COLD CR_FUNC real Triangle_PlaneTDf(const real org[3], const real dir[3], const Triangle* tri)
+{
+  Df e1[3], e2[3], p[3], n[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    e1[i] = Df_SumF(tri->v1[i], -tri->v0[i]);
+    e2[i] = Df_SumF(tri->v2[i], -tri->v0[i]);
+    p[i] = Df_SumF(tri->v0[i], -org[i]);
+  }
+  Df_Cross(e1, e2, n);
+  const Df nd = Df_Dot3F(n, dir);
+  if (nd.hi == 0.0f) return CR_INF;
+  return Df_Div(Df_Dot3(n, p), nd).hi;
+}
+/* Whether Triangle_Intersect's float t (n . p / n . d from the products np)
+ * needs Triangle_PlaneTDf: n . p cancels by more than 16 (the shared vertex
+ * far from the origin relative to the plane's distance: a huge triangle seen
+ * from nearby, or a grazing view), and t, off by at most a quarter unless it
+ * cancels by more than 2^18, may lie in [tmin, tmax]. */
+CR_FUNC int Triangle_PlaneNeedsDf(real np0, real np1, real np2, real t, real tmin, real tmax)
+{
+  const real sum = (fabs(np0) + fabs(np1)) + fabs(np2), np = fabs((np0 + np1) + np2);
+  if (!(sum > 16.0f * np)) return 0;
+  if (sum > 0x1.0p18f * np) return 1;
+  return t + 0.25f * fabs(t) >= tmin && t - 0.25f * fabs(t) <= tmax;
+}
+
+/* One watertight edge function P'x Q'y - P'y Q'x of the vertices p, q
+ * (world coordinates) translated to the ray origin and sheared, in
+ * double-float from the exact p - o, q - o. Swapping p and q gives the exact
+ * negation, as in float, so the two triangles sharing the edge still agree. */
+CR_FUNC Df Triangle_ShearDf(const Ray* r, const real v[3], int axis)
+{
+  const Df tz = Df_SumF(CR_PICK3(v, r->kz), -CR_PICK3(r->org, r->kz));
+  const Df ta = Df_SumF(CR_PICK3(v, axis), -CR_PICK3(r->org, axis));
+  return Df_Sub(ta, Df_MulF(tz, axis == r->kx ? r->sx : r->sy));
+}
+CR_FUNC real Triangle_EdgeDf(const Ray* r, const real p[3], const real q[3])
+{
+  const Df px = Triangle_ShearDf(r, p, r->kx), py = Triangle_ShearDf(r, p, r->ky);
+  const Df qx = Triangle_ShearDf(r, q, r->kx), qy = Triangle_ShearDf(r, q, r->ky);
+  return Df_Sub(Df_Mul(px, qy), Df_Mul(py, qx)).hi;
+}
+/* L1 norm of v - o in float: the scale of the rounding of v's sheared
+ * coordinates (|sx|, |sy| <= 1: kz is the dominant axis). */
+CR_FUNC real Triangle_VertexScale(const Ray* r, const real v[3])
+{
+  return (fabs(v[0] - r->org[0]) + fabs(v[1] - r->org[1])) + fabs(v[2] - r->org[2]);
+}
+/* The float edge functions U, V, W of a triangle with long edges (flags
+ * CR_TRI_LONG_*: longer than 16 times their distance from the world origin,
+ * where float's error, relative to |v - o|, can exceed check.h's tolerance,
+ * relative to |o| + t |d|): a flagged edge whose value lies within its
+ * rounding error of 0, 2^-18 |P - o|_1 |Q - o|_1 (translation, shear and
+ * products each err by a few u times these magnitudes), is recomputed in
+ * double-float. An edge's flag, bound and value depend on the edge alone,
+ * so both triangles sharing it decide alike and the test stays watertight. */
+CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
+{
+  real v0[3], v1[3], v2[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    v0[i] = tri->v0[i];
+    v1[i] = tri->v1[i];
+    v2[i] = tri->v2[i];
+  }
+  const real n0 = Triangle_VertexScale(r, v0), n1 = Triangle_VertexScale(r, v1), n2 = Triangle_VertexScale(r, v2);
+  if ((tri->flags & CR_TRI_LONG_U) && fabs(*U) <= 0x1.0p-18f * (n1 * n2)) *U = Triangle_EdgeDf(r, v2, v1);
+  if ((tri->flags & CR_TRI_LONG_V) && fabs(*V) <= 0x1.0p-18f * (n2 * n0)) *V = Triangle_EdgeDf(r, v0, v2);
+  if ((tri->flags & CR_TRI_LONG_W) && fabs(*W) <= 0x1.0p-18f * (n0 * n1)) *W = Triangle_EdgeDf(r, v1, v0);
+}
+
+/* Cone_Intersect in double-float from the exact apex - base and o - base:
+ * the cold path for Quadratic_NeedsDf (a cylinder of radius 1e6 as a ground,
+ * a cone 1e6 long seen from 100 away). Same formulas as the float test. */
+CR_COLD CR_FUNC int Cone_IntersectDf(const real org[3], const real dir[3], const Cone* cn, real tmin, real tmax,
+                                     real* tHit)
+{
+  Df w[3], dl[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    w[i] = Df_SumF(cn->apex[i], -cn->base[i]);
+    dl[i] = Df_SumF(org[i], -cn->base[i]);
+  }
+  const Df H = Df_Sqrt(Df_Dot3(w, w));
+  if (!(H.hi > 0.0f)) return 0;
+  CR_UNROLL for (int i = 0; i < 3; ++i) w[i] = Df_Div(w[i], H);
+  const Df r0 = Df_F(cn->baseRadius);
+  const Df k = Df_Div(Df_SumF(cn->apexRadius, -cn->baseRadius), H);
+  const Df ds = Df_Dot3F(w, dir);
+  const Df os = Df_Dot3(dl, w);
+  Df dR[3], oR[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    dR[i] = Df_Sub(Df_F(dir[i]), Df_Mul(ds, w[i]));
+    oR[i] = Df_Sub(dl[i], Df_Mul(os, w[i]));
+  }
+  const Df rb = Df_Add(r0, Df_Mul(k, os));
+  const Df kds = Df_Mul(k, ds);
+  const Df A = Df_Sub(Df_Dot3(dR, dR), Df_Mul(kds, kds));
+  const Df Bh = Df_Sub(Df_Dot3(oR, dR), Df_Mul(kds, rb));
+  const Df C = Df_Sub(Df_Dot3(oR, oR), Df_Mul(rb, rb));
+  real t0, t1;
+  if (A.hi == 0.0f) {
+    if (Bh.hi == 0.0f) return 0;
+    t0 = t1 = Df_Div(Df_Neg(C), Df_MulF(Bh, 2.0f)).hi;
+  } else {
+    Df e[3], x[3];
+    CR_UNROLL for (int i = 0; i < 3; ++i) e[i] = Df_Sub(Df_Mul(rb, dR[i]), Df_Mul(kds, oR[i]));
+    Df_Cross(oR, dR, x);
+    const Df disc = Df_Sub(Df_Dot3(e, e), Df_Dot3(x, x));
+    if (disc.hi < 0.0f) return 0;
+    Df_QuadraticRoots(A, Bh, C, disc, &t0, &t1);
+  }
+  for (int root = 0; root < 2; ++root) {
+    const real t = root == 0 ? t0 : t1;
+    if (!(t >= tmin && t <= tmax)) continue;
+    const Df sx = Df_Add(os, Df_MulF(ds, t));
+    if (sx.hi >= 0.0f && Df_Sub(sx, H).hi <= 0.0f) {
+      *tHit = t;
+      return 1;
+    }
+  }
+  return 0;
+}
 #endif
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
@@ -226,10 +520,16 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
 #ifndef CR_FP64
   const real Q = 0x1.0p-29f * (ff * a);
   if (disc < -0x1.0p15f * Q) return 0;
-  if (Sphere_DiscUndecided(disc, Q, cc)) disc = Sphere_DiscExact(r, s, f, ar2);
+  /* Hit or miss not decided by float: double-float from the exact o - c. */
+  if (Sphere_DiscUndecided(disc, Q, cc)) return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
 #endif
   if (disc < (real)0.0f) return 0;
-  Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1);
+  real q;
+  Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1, &q);
+#ifndef CR_FP64
+  if (Quadratic_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, t0, t1, tmin, tmax))
+    return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
+#endif
 #endif
   if (t0 >= tmin && t0 <= tmax) {
     *tHit = t0;
@@ -320,9 +620,12 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   const real Ax = CR_PICK3(A, kx) - r->sx * CR_PICK3(A, kz), Ay = CR_PICK3(A, ky) - r->sy * CR_PICK3(A, kz);
   const real Bx = CR_PICK3(B, kx) - r->sx * CR_PICK3(B, kz), By = CR_PICK3(B, ky) - r->sy * CR_PICK3(B, kz);
   const real Cx = CR_PICK3(C, kx) - r->sx * CR_PICK3(C, kz), Cy = CR_PICK3(C, ky) - r->sy * CR_PICK3(C, kz);
-  const real U = Cx * By - Cy * Bx;
-  const real V = Ax * Cy - Ay * Cx;
-  const real W = Bx * Ay - By * Ax;
+  real U = Cx * By - Cy * Bx;
+  real V = Ax * Cy - Ay * Cx;
+  real W = Bx * Ay - By * Ax;
+#ifndef CR_FP64
+  if (tri->flags & CR_TRI_LONG_EDGES) Triangle_RefineEdges(r, tri, &U, &V, &W);
+#endif
   if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
     return 0;
   const real det = U + V + W;
@@ -342,7 +645,11 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = shared == 1 ? B[i] : (shared == 2 ? C[i] : A[i]);
   const real nd = Dot3(n, r->dir);
   if (nd == (real)0.0f) return 0;
-  const real t = Dot3(n, p) / nd;
+  const real np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
+  real t = ((np0 + np1) + np2) / nd;
+#ifndef CR_FP64
+  if (Triangle_PlaneNeedsDf(np0, np1, np2, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
+#endif
   if (!(t >= tmin && t <= tmax)) return 0;
   const real invDet = (real)1.0f / det;
   *tHit = t;
@@ -399,9 +706,22 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
     x[0] = oR[1] * dR[2] - oR[2] * dR[1];
     x[1] = oR[2] * dR[0] - oR[0] * dR[2];
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
-    real disc = Dot3(e, e) - Dot3(x, x);
+    const real ee = Dot3(e, e), xx = Dot3(x, x);
+    real disc = ee - xx;
+#ifndef CR_FP64
+    /* A discriminant within its rounding of 0 (a ray grazing a huge cone):
+     * hit or miss decided in double-float. */
+    if (disc < (real)0.0f && -disc <= 0x1.0p-20f * (ee + xx))
+      return Cone_IntersectDf(r->org, r->dir, cn, tmin, tmax, tHit);
+#endif
     if (disc < (real)0.0f) return 0;
-    Quadratic_Roots(A, Bh, C, Dot3(oR, oR) + rb * rb, disc, &t0, &t1);
+    const real oo = Dot3(oR, oR);
+    real q;
+    Quadratic_Roots(A, Bh, C, oo + rb * rb, disc, &t0, &t1, &q);
+#ifndef CR_FP64
+    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3(dl, dl), oo, t0, t1, tmin, tmax))
+      return Cone_IntersectDf(r->org, r->dir, cn, tmin, tmax, tHit);
+#endif
 #endif
   }
   if (t0 >= tmin && t0 <= tmax) {

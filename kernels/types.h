@@ -17,6 +17,14 @@ CR_NS_BEGIN
 
 #define CR_NO_HIT 0xFFFFFFFFu
 #define CR_TRI_REPORT_UV 1u   /* Triangle.flags: the piece is a whole triangle statement */
+/* Triangle.flags: edges longer than 16 times their distance from the world
+ * origin (host/scene/scene.h TriangleEdgeFlags), whose float edge functions
+ * robust mode checks against an error bound (kernels/intersect.h,
+ * Triangle_RefineEdges): edge v1-v2 (U), v2-v0 (V), v0-v1 (W). */
+#define CR_TRI_LONG_U 2u
+#define CR_TRI_LONG_V 4u
+#define CR_TRI_LONG_W 8u
+#define CR_TRI_LONG_EDGES 14u
 
 /* One record of a .rays file, and the layout rays are uploaded in. 32 bytes. */
 typedef struct {
@@ -44,7 +52,7 @@ typedef struct {
  * keep each vertex 16-byte aligned for vector loads. */
 typedef struct {
   float v0[3];
-  uint flags; /* CR_TRI_REPORT_UV */
+  uint flags; /* CR_TRI_REPORT_UV, CR_TRI_LONG_* */
   float v1[3];
   uint pad1;
   float v2[3];

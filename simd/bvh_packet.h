@@ -166,7 +166,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
           C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
         }
       }
-      ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>(tri), P.org, P.dir, P.tmin, H.t, t, u, v);
+      ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>{tri}, P.org, P.dir, P.tmin, H.t, t, u, v);
     }
   } else {
     const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];
@@ -175,7 +175,9 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
       dl[i] = P.org[i] - vfloat<N>(cd.base[i]);
       w[i] = vfloat<N>(cd.w[i]);
     }
-    ok = Cone_IntersectN<kFast, N>(dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin, H.t, t);
+    const Cone* cone = &sc.coneGeometry[g - c.nSpheres - c.nTriangles];
+    ok = Cone_IntersectN<kFast, N>(P.org, dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin,
+                                   H.t, t, [cone](int) { return cone; });
   }
   const vint<N> gv(static_cast<int>(g));
   const vbool<N> found = m & ok;

@@ -144,7 +144,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
           B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
           C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>(pk.v), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.flags}, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
                                      u, v);
       }
       if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
@@ -165,8 +165,12 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
         w[i] = vfloat<K>::Load(pk.w[i]);
       }
       const vbool<K> ok =
-          valid & Cone_IntersectN<kFast, K>(dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
-                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t);
+          valid & Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
+                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t, [&](int l) {
+                                              return valid.Bits() >> l & 1u
+                                                         ? &sc.coneGeometry[pk.g[l] - sc.counts.nSpheres - sc.counts.nTriangles]
+                                                         : nullptr;
+                                            });
       if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
         changed = true;
         if (anyHit) return true;

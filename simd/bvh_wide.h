@@ -51,9 +51,10 @@ struct SpherePack {  // 20 K bytes
 };
 
 template <int K>
-struct TrianglePack {  // 40 K bytes
+struct TrianglePack {  // 44 K bytes
   float v[3][3][K];    // [vertex][axis][lane]
   std::uint32_t g[K];
+  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read)
 };
 
 // Cone with the ray-independent terms of Cone_Intersect (kernels/intersect.h)

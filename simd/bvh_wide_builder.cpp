@@ -86,6 +86,7 @@ struct Collapser {
         p.v[1][a][l] = t.v1[a];
         p.v[2][a][l] = t.v2[a];
       }
+      p.flags[l] = t.flags;
     });
     leaf.first[2] = Packs(out.cones, refs + nS + nT, nC, [&](ConePack<K>& p, int l, std::uint32_t g) {
       const ConeData& d = cones[g - c.nSpheres - c.nTriangles];

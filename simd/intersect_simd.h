@@ -91,19 +91,89 @@ CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], cons
   return Box_Finish<kFast, N>(n, f, tmin, tmax, tEnter);
 }
 
+// The window of the double-float cold paths: [t0, t1] widened by a quarter
+// on either side meets [tmin, tmax] (kernels/intersect.h, Quadratic_NeedsDf).
+template <int N>
+CR_SIMD_INLINE vbool<N> Window25N(vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
+{
+  const vfloat<N> q(0.25f);
+  return (t1 + q * Abs(t1) >= tmin) & (t0 - q * Abs(t0) <= tmax);
+}
+
 // Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller
 // first; the Vieta root c/q gives way to the direct root (sq - bh)/a when q is
 // so small that c's own rounding (about eps * cScale) dominates.
 template <int N>
 CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfloat<N> cScale, vfloat<N> disc,
-                                     vfloat<N>& t0, vfloat<N>& t1)
+                                     vfloat<N>& t0, vfloat<N>& t1, vfloat<N>& q)
 {
   const vfloat<N> sq = CopySign(Sqrt(disc), bh);
-  const vfloat<N> q = -(bh + sq);
+  q = -(bh + sq);
   const vfloat<N> r0 = q / a;
   const vfloat<N> r1 = Select(vfloat<N>(16.0f) * q * q >= a * cScale, c / q, (sq - bh) / a);
   t0 = FMin(r0, r1);
   t1 = FMax(r0, r1);
+}
+
+// Quadratic_NeedsDf of kernels/intersect.h, lane by lane: the float roots
+// may be off by more than a few ulps and may lie in [tmin, tmax].
+template <int N>
+CR_SIMD_INLINE vbool<N> Quadratic_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N> bh, vfloat<N> disc,
+                                           vfloat<N> dScale, vfloat<N> q, vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin,
+                                           vfloat<N> tmax)
+{
+  const vfloat<N> dd = disc * (bh * bh + disc);
+  const vfloat<N> ds2 = dScale * dScale;
+  const vbool<N> inaccurate = (cScale > vfloat<N>(8.0f) * Abs(c)) | (ds2 > vfloat<N>(64.0f) * dd);
+  if (None(inaccurate)) return inaccurate;
+  const vfloat<N> slack = vfloat<N>(0.25f) * FMax(Abs(t0), Abs(t1)) + vfloat<N>(0x1.0p-18f) * cScale / Abs(q);
+  const vbool<N> window = (t1 + slack >= tmin) & (t0 - slack <= tmax);
+  return inaccurate & ((ds2 > vfloat<N>(0x1.0p36f) * dd) | window);
+}
+
+// Cone_NeedsDf of kernels/intersect.h, lane by lane.
+template <int N>
+CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc, vfloat<N> dScale,
+                                      vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> t0, vfloat<N> t1,
+                                      vfloat<N> tmin, vfloat<N> tmax)
+{
+  const vbool<N> quad = Quadratic_NeedsDfN<N>(C, cScale, Bh, disc, dScale, q, t0, t1, tmin, tmax);
+  const vbool<N> radial = dl2 > vfloat<N>(64.0f) * oo;
+  if (None(radial)) return quad;
+  const vfloat<N> slack = vfloat<N>(0.25f) * FMax(Abs(t0), Abs(t1));
+  const vbool<N> window = (t1 + slack >= tmin) & (t0 - slack <= tmax);
+  return quad | (radial & ((dl2 > vfloat<N>(0x1.0p36f) * oo) | window));
+}
+
+// The lanes of `bits` take a scalar kernel's double-float test (the cold
+// paths of kernels/intersect.h, compiled in this namespace: the same bits as
+// the scalar and OpenCL backends). test(l, &t) returns whether lane l hits,
+// and its t. Rare, so out of line.
+template <int N, class Test>
+__attribute__((noinline, cold)) void RefineLanesN(unsigned bits, Test&& test, vfloat<N>& tHit, vbool<N>& ok)
+{
+  alignas(32) float t[N];
+  tHit.Store(t);
+  unsigned okBits = ok.Bits();
+  for (; bits; bits &= bits - 1) {
+    const int l = LowestBit(bits);
+    float th = 0.0f;
+    if (test(l, &th)) {
+      t[l] = th;
+      okBits |= 1u << l;
+    } else {
+      okBits &= ~(1u << l);
+    }
+  }
+  tHit = vfloat<N>::Load(t);
+  ok = vbool<N>::FromBits(okBits);
+}
+
+// Lane l of a vector array as a float[3].
+template <int N>
+CR_SIMD_INLINE void Lane3(const vfloat<N> v[3], int l, float out[3])
+{
+  for (int i = 0; i < 3; ++i) out[i] = v[i][l];
 }
 
 // Error-free transformations, lane by lane those of kernels/intersect.h:
@@ -185,19 +255,53 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
       tHit = vfloat<N>(0.0f);
       return vbool<N>(false);
     }
+    // Undecided lanes (Sphere_DiscUndecided) and lanes whose roots may be
+    // off (Quadratic_NeedsDf) take the double-float test.
     const vbool<N> undecided = disc * disc <= Q * (cc + vfloat<N>(0x1.0p-9f) * Q);
-    if (Any(undecided)) disc = Select(undecided, Sphere_DiscExactN<N>(org, cen, dir, ar2), disc);
     miss = disc < vfloat<N>(0.0f);
-    if (All(miss)) {
+    if (All(AndNot(miss, undecided))) {
       tHit = vfloat<N>(0.0f);
       return vbool<N>(false);
     }
-    Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1);
+    vfloat<N> q;
+    Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1, q);
+    const vbool<N> refine =
+        undecided | AndNot(Quadratic_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, t0, t1, tmin, tmax), miss);
+    if (Any(refine)) {
+      const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
+      const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
+      tHit = Select(in0, t0, t1);
+      vbool<N> ok = AndNot(in0 | in1, miss);
+      RefineLanesN<N>(refine.Bits(), [&](int l, float* th) {
+        float o[3], d[3];
+        Lane3<N>(org, l, o);
+        Lane3<N>(dir, l, d);
+        Sphere sp;
+        Lane3<N>(cen, l, sp.center);
+        sp.radius = rad[l];
+        return Sphere_IntersectDf(o, d, &sp, tmin[l], tmax[l], th) != 0;
+      }, tHit, ok);
+      return ok;
+    }
   }
   const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
   const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
   tHit = Select(in0, t0, t1);
   return AndNot(in0 | in1, miss);
+}
+
+// n . p / nd with the products summed in Dot3's order; `inexact`: the lanes
+// where n . p cancels by more than 16 (Triangle_Intersect's cold-path rule).
+template <int N>
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], vfloat<N> nd,
+                                            vbool<N>& inexact, vbool<N>& veryInexact)
+{
+  const vfloat<N> np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
+  const vfloat<N> np = (np0 + np1) + np2;
+  const vfloat<N> sum = (Abs(np0) + Abs(np1)) + Abs(np2), anp = Abs(np);
+  inexact = sum > vfloat<N>(16.0f) * anp;
+  veryInexact = sum > vfloat<N>(0x1.0p18f) * anp;
+  return np / nd;
 }
 
 // The distance along the ray to the triangle's plane, kernels/intersect.h's
@@ -207,7 +311,8 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
 // in world axis order.
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
-                                          const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss)
+                                          const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss,
+                                          vbool<N>& inexact, vbool<N>& veryInexact)
 {
   vfloat<N> e0[3], e1[3], e2[3];
   for (int i = 0; i < 3; ++i) {
@@ -233,7 +338,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   n[2] = ea[0] * eb[1] - ea[1] * eb[0];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Dot3N<N>(n, p) / nd;
+  return Triangle_PlaneDivN<N>(n, p, nd, inexact, veryInexact);
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
@@ -242,7 +347,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
 // simd/CMakeLists.txt), which gives every lane Triangle_PlaneTN's bits.
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> org[3], const vfloat<N> dir[3],
-                                           vbool<N>& miss)
+                                           vbool<N>& miss, vbool<N>& inexact, vbool<N>& veryInexact)
 {
   float nf[3];
   const int shared = Triangle_PlaneNormal(&tri, nf);
@@ -252,45 +357,106 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
   for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Dot3N<N>(n, p) / nd;
+  return Triangle_PlaneDivN<N>(n, p, nd, inexact, veryInexact);
 }
 
-// Plane sources for Triangle_WatertightN, called as plane(org, dir, miss)
-// for the distance to the triangle's plane: vertices already in registers
-// (a transposed group), a TrianglePack's [vertex][axis][lane] floats, or one
-// triangle for every lane (packets).
+// Plane sources for Triangle_WatertightN: T(org, dir, miss, inexact) gives
+// the distance to the triangle's plane, Tri(l) lane l's triangle (for the
+// double-float cold path). Vertices already in registers (a transposed
+// group), a TrianglePack's [vertex][axis][lane] floats, or one triangle for
+// every lane (packets).
 template <int N>
-CR_SIMD_INLINE auto VecPlane(const vfloat<N> (&vtx)[3][4])
-{
-  return [&vtx](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
-    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss);
-  };
-}
+struct VecPlane {
+  const vfloat<N> (&vtx)[3][4];
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  {
+    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss, inexact, vi);
+  }
+  // Lanes whose triangle has long edges (the flags word rides in v0's
+  // fourth float).
+  unsigned LongEdgeLanes() const { return MaskedLanes(vtx[0][3], CR_TRI_LONG_EDGES); }
+  Triangle Tri(int l) const
+  {
+    Triangle t{};
+    for (int i = 0; i < 3; ++i) {
+      t.v0[i] = vtx[0][i][l];
+      t.v1[i] = vtx[1][i][l];
+      t.v2[i] = vtx[2][i][l];
+    }
+    t.flags = __builtin_bit_cast(std::uint32_t, vtx[0][3][l]);
+    return t;
+  }
+};
 template <int N>
-CR_SIMD_INLINE auto PackPlane(const float (&pv)[3][3][N])
-{
-  return [&pv](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
+struct PackPlane {
+  const float (&pv)[3][3][N];
+  const std::uint32_t (&flags)[N];
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  {
     vfloat<N> v0[3], v1[3], v2[3];
     for (int i = 0; i < 3; ++i) {
       v0[i] = vfloat<N>::Load(pv[0][i]);
       v1[i] = vfloat<N>::Load(pv[1][i]);
       v2[i] = vfloat<N>::Load(pv[2][i]);
     }
-    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss);
-  };
-}
+    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, inexact, vi);
+  }
+  unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
+  Triangle Tri(int l) const
+  {
+    Triangle t{};
+    for (int i = 0; i < 3; ++i) {
+      t.v0[i] = pv[0][i][l];
+      t.v1[i] = pv[1][i][l];
+      t.v2[i] = pv[2][i][l];
+    }
+    t.flags = flags[l];
+    return t;
+  }
+};
 template <int N>
-CR_SIMD_INLINE auto OnePlane(const Triangle& tri)
+struct OnePlane {
+  const Triangle& tri;
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  {
+    return Triangle_PlaneT1N<N>(tri, org, dir, miss, inexact, vi);
+  }
+  unsigned LongEdgeLanes() const { return tri.flags & CR_TRI_LONG_EDGES ? (1u << N) - 1u : 0u; }
+  Triangle Tri(int) const { return tri; }
+};
+
+// Triangle_RefineEdges of kernels/intersect.h for the lanes of `bits`: the
+// lane's ray prepared as the scalar kernels prepare it (Ray_Init), its
+// triangle from the plane source.
+template <int N, class PlaneFn>
+__attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
+                                                           const vfloat<N> dir[3], vfloat<N>& U, vfloat<N>& V,
+                                                           vfloat<N>& W)
 {
-  return [&tri](const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss) {
-    return Triangle_PlaneT1N<N>(tri, org, dir, miss);
-  };
+  alignas(32) float u[N], v[N], w[N];
+  U.Store(u);
+  V.Store(v);
+  W.Store(w);
+  for (; bits; bits &= bits - 1) {
+    const int l = LowestBit(bits);
+    RayRecord rec{};
+    Lane3<N>(org, l, rec.org);
+    Lane3<N>(dir, l, rec.dir);
+    rec.tmax = __builtin_inff();
+    Ray ray;
+    Ray_Init(&ray, &rec);
+    const Triangle tri = plane.Tri(l);
+    Triangle_RefineEdges(&ray, &tri, &u[l], &v[l], &w[l]);
+  }
+  U = vfloat<N>::Load(u);
+  V = vfloat<N>::Load(v);
+  W = vfloat<N>::Load(w);
 }
 
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
-// plane(org, dir, miss) gives the distance to the triangle's plane
+// plane.T(org, dir, miss, inexact) gives the distance to the triangle's plane
 // (Triangle_PlaneTN; the plane sources above); it runs only when some lane
 // passes the edge tests (most tests miss before), so the world-order
 // vertices are not loaded or kept in registers for the others.
@@ -303,9 +469,12 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
   const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
   const vfloat<N> Cx = C[0] - s[0] * C[2], Cy = C[1] - s[1] * C[2];
-  const vfloat<N> U = Cx * By - Cy * Bx;
-  const vfloat<N> V = Ax * Cy - Ay * Cx;
-  const vfloat<N> W = Bx * Ay - By * Ax;
+  vfloat<N> U = Cx * By - Cy * Bx;
+  vfloat<N> V = Ax * Cy - Ay * Cx;
+  vfloat<N> W = Bx * Ay - By * Ax;
+  // Triangles with long edges: the scalar kernels' Triangle_RefineEdges,
+  // lane by lane.
+  if (const unsigned longLanes = plane.LongEdgeLanes()) Triangle_RefineEdgesN<N>(longLanes, plane, org, dir, U, V, W);
   const vfloat<N> zero(0.0f);
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
   const vfloat<N> det = U + V + W;
@@ -316,8 +485,22 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     return vbool<N>(false);
   }
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
-  // axis order, which the sums' rounding depends on).
-  const vfloat<N> t = plane(org, dir, miss);
+  // axis order, which the sums' rounding depends on); where n . p cancels
+  // and t may lie in [tmin, tmax], from double-float (Triangle_PlaneTDf).
+  vbool<N> inexact, veryInexact;
+  vfloat<N> t = plane.T(org, dir, miss, inexact, veryInexact);
+  const vbool<N> refine = AndNot(inexact & (veryInexact | Window25N<N>(t, t, tmin, tmax)), miss);
+  if (Any(refine)) {
+    vbool<N> all(true);
+    RefineLanesN<N>(refine.Bits(), [&](int l, float* th) {
+      float o[3], d[3];
+      Lane3<N>(org, l, o);
+      Lane3<N>(dir, l, d);
+      const Triangle tri = plane.Tri(l);
+      *th = Triangle_PlaneTDf(o, d, &tri);
+      return true;
+    }, t, all);
+  }
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;
   uHit = V * invDet;
@@ -362,11 +545,13 @@ CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vf
 }
 
 // Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
-// dl = org - base.
-template <bool kFast, int N>
-CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> dir[3], const vfloat<N> w[3],
-                                        vfloat<N> H, vfloat<N> r0, vfloat<N> k, vfloat<N> tmin, vfloat<N> tmax,
-                                        vfloat<N>& tHit)
+// dl = org - base. coneOf(l) is lane l's cone as the scene holds it (nullptr
+// for a lane that holds none), for the double-float cold path
+// (Cone_IntersectDf), which must start from the stored apex and base.
+template <bool kFast, int N, class ConeOf>
+CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> dl[3], const vfloat<N> dir[3],
+                                        const vfloat<N> w[3], vfloat<N> H, vfloat<N> r0, vfloat<N> k, vfloat<N> tmin,
+                                        vfloat<N> tmax, vfloat<N>& tHit, ConeOf&& coneOf)
 {
   const vfloat<N> zero(0.0f);
   vbool<N> miss = !(H > zero);
@@ -386,7 +571,7 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
   const vbool<N> linear = A == zero;
   const vfloat<N> tLin = -C / (vfloat<N>(2.0f) * Bh);
   vfloat<N> t0, t1;
-  vbool<N> quadMiss;
+  vbool<N> quadMiss, refine(false);
   if constexpr (kFast) {
     const vfloat<N> disc4 = vfloat<N>(4.0f) * Bh * Bh - vfloat<N>(4.0f) * A * C;
     quadMiss = disc4 < zero;
@@ -401,14 +586,21 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
     x[0] = oR[1] * dR[2] - oR[2] * dR[1];
     x[1] = oR[2] * dR[0] - oR[0] * dR[2];
     x[2] = oR[0] * dR[1] - oR[1] * dR[0];
-    const vfloat<N> disc = Dot3N<N>(e, e) - Dot3N<N>(x, x);
+    const vfloat<N> ee = Dot3N<N>(e, e), xx = Dot3N<N>(x, x);
+    const vfloat<N> disc = ee - xx;
     quadMiss = disc < zero;
+    // A discriminant within its rounding of 0: decided in double-float.
+    const vbool<N> undecided = AndNot(quadMiss & (-disc <= vfloat<N>(0x1.0p-20f) * (ee + xx)), miss | linear);
     // Skip the square root and divisions when every lane misses already.
-    if (All(miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear))) {
+    if (None(undecided) && All(miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear))) {
       tHit = zero;
       return vbool<N>(false);
     }
-    Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1);
+    vfloat<N> q;
+    Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1, q);
+    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3N<N>(dl, dl), oo, t0, t1, tmin, tmax),
+                    miss | linear | quadMiss) |
+             undecided;
   }
   t0 = Select(linear, tLin, t0);
   t1 = Select(linear, tLin, t1);
@@ -418,7 +610,20 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> dl[3], const vfloat<N> d
   const vbool<N> ok0 = (t0 >= tmin) & (t0 <= tmax) & (s0 >= zero) & (s0 <= H);
   const vbool<N> ok1 = (t1 >= tmin) & (t1 <= tmax) & (s1 >= zero) & (s1 <= H);
   tHit = Select(ok0, t0, t1);
-  return AndNot(ok0 | ok1, miss);
+  vbool<N> ok = AndNot(ok0 | ok1, miss);
+  if constexpr (!kFast) {
+    if (Any(refine)) {
+      RefineLanesN<N>(refine.Bits(), [&](int l, float* th) {
+        const Cone* cn = coneOf(l);
+        if (!cn) return false;
+        float o[3], d[3];
+        Lane3<N>(org, l, o);
+        Lane3<N>(dir, l, d);
+        return Cone_IntersectDf(o, d, cn, tmin[l], tmax[l], th) != 0;
+      }, tHit, ok);
+    }
+  }
+  return ok;
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -131,7 +131,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
           B[j] = vtx[1][pr.k[j]] - pr.orgK[j];
           C[j] = vtx[2][pr.k[j]] - pr.orgK[j];
         }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, VecPlane<K>(vtx), pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
+        ok = Triangle_WatertightN<K>(A, B, C, pr.s, VecPlane<K>{vtx}, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
                                      u, v);
       }
     } else {
@@ -148,7 +148,8 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       LoadTransposed4(rows, r2);
       vfloat<K> dl[3];
       for (int a = 0; a < 3; ++a) dl[a] = pr.org[a] - r0[a];
-      ok = Cone_IntersectN<kFast, K>(dl, pr.dir, r1, r0[3], r1[3], r2[0], pr.tmin, vfloat<K>(hit.t), t);
+      ok = Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, r1, r0[3], r1[3], r2[0], pr.tmin, vfloat<K>(hit.t), t,
+                                     [&](int l) { return &sc.coneGeometry[g[l] - c.nSpheres - c.nTriangles]; });
     }
     if (anyHit) {
       // The first occluder in reference order, as the scalar loop finds it

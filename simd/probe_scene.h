@@ -28,6 +28,7 @@ struct ProbeScene {
     sc.spheres = scene.spheres.data();
     sc.triangles = scene.triangles.data();
     sc.cones = cones.data();
+    sc.coneGeometry = scene.cones.data();
     sc.counts = scene.Counts();
     sc.primIds = ids.data();
   }

@@ -43,6 +43,7 @@ struct KernelScene {
   const Sphere* spheres = nullptr;
   const Triangle* triangles = nullptr;
   const ConeData* cones = nullptr;
+  const Cone* coneGeometry = nullptr;  // the scene's cones (Cone_IntersectN's double-float cold path)
   PrimCounts counts{};
   const std::uint32_t* primIds = nullptr;  // scene id of every g
   int unifiedHits = 0;                     // TraceConfig::unifiedHits

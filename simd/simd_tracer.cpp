@@ -133,6 +133,7 @@ class SimdTracer final : public Tracer {
     sc_.spheres = scene.spheres.data();
     sc_.triangles = scene.triangles.data();
     sc_.cones = cones_.data();
+    sc_.coneGeometry = scene.cones.data();
     sc_.counts = scene.Counts();
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;

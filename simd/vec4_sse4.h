@@ -195,4 +195,14 @@ CR_SIMD_INLINE vfloat<4> PermuteXYZ(const float* p, vint<4> sel)
   return vfloat<4>(_mm_castsi128_ps(_mm_shuffle_epi8(_mm_castps_si128(_mm_loadu_ps(p)), sel.v)));
 }
 
+// The lanes whose 32 bits (a float's bit pattern, or an integer) have some
+// bit of `mask` set, as a lane mask.
+CR_SIMD_INLINE unsigned MaskedLanes(__m128i bits, std::uint32_t mask)
+{
+  const __m128i m = _mm_and_si128(bits, _mm_set1_epi32(static_cast<int>(mask)));
+  return unsigned(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(m, _mm_setzero_si128())))) ^ 0xFu;
+}
+CR_SIMD_INLINE unsigned MaskedLanes(vfloat<4> x, std::uint32_t mask) { return MaskedLanes(_mm_castps_si128(x.v), mask); }
+CR_SIMD_INLINE unsigned MaskedLanes(vint<4> x, std::uint32_t mask) { return MaskedLanes(x.v, mask); }
+
 }  // namespace cr::simd::CR_SIMD_NS

@@ -185,4 +185,16 @@ CR_SIMD_INLINE vfloat<8> PermuteXYZ(const float* p, vint<8> sel)
   return vfloat<8>(_mm256_permutevar_ps(_mm256_broadcast_ps(reinterpret_cast<const __m128*>(p)), sel.v));
 }
 
+// MaskedLanes of vec4_sse4.h on 8 lanes.
+CR_SIMD_INLINE unsigned MaskedLanes(__m256i bits, std::uint32_t mask)
+{
+  const __m256i m = _mm256_and_si256(bits, _mm256_set1_epi32(static_cast<int>(mask)));
+  return unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(m, _mm256_setzero_si256())))) ^ 0xFFu;
+}
+CR_SIMD_INLINE unsigned MaskedLanes(vfloat<8> x, std::uint32_t mask)
+{
+  return MaskedLanes(_mm256_castps_si256(x.v), mask);
+}
+CR_SIMD_INLINE unsigned MaskedLanes(vint<8> x, std::uint32_t mask) { return MaskedLanes(x.v, mask); }
+
 }  // namespace cr::simd::CR_SIMD_NS

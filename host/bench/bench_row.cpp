@@ -49,6 +49,7 @@ void to_json(nlohmann::json& j, const Row& r)
     const double n = r.rays ? double(r.rays) : 1.0;
     j["error"] = {{"agree", r.error->agree},
                   {"ties", r.error->ties},
+                  {"flips", r.error->flips},
                   {"wrong", r.error->wrong},
                   {"wrong_rate", double(r.error->wrong) / n},
                   {"max_rel_t_err", r.error->maxRelTErr},

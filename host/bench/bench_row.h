@@ -23,7 +23,7 @@ struct PerRay {
 };
 
 struct ErrorSummary {
-  std::uint64_t agree = 0, ties = 0, wrong = 0;
+  std::uint64_t agree = 0, ties = 0, flips = 0, wrong = 0;
   double maxRelTErr = 0.0, meanRelTErr = 0.0;
 };
 

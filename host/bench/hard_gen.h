@@ -28,6 +28,7 @@ void AddGrazingCases(std::vector<CaseSpec>& specs);
 void AddSelfCases(std::vector<CaseSpec>& specs);
 void AddDegenerateCases(std::vector<CaseSpec>& specs);
 void AddExtremeCases(std::vector<CaseSpec>& specs);
+void AddHugeCases(std::vector<CaseSpec>& specs);
 
 // SplitMix64 (Steele, Lea & Flood 2014): the same numbers from a seed on any
 // standard library, unlike std::uniform_real_distribution.

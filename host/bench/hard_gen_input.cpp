@@ -141,6 +141,7 @@ HardCase RawPieces(const GenOptions& o)
     info.firstPiece = std::uint32_t(s.triangles.size());
     info.nPieces = 1;
     cr::Triangle t{{a.x, a.y, a.z}, CR_TRI_REPORT_UV, {bb.x, bb.y, bb.z}, 0, {cc.x, cc.y, cc.z}, 0};
+    t.flags |= TriangleEdgeFlags(t);
     s.triangleIds.push_back(s.NumPrims());
     s.triangles.push_back(t);
     s.prims.push_back(info);

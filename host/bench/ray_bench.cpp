@@ -34,7 +34,7 @@ std::size_t HashHits(const std::vector<HitRecord>& hits)
 
 ErrorSummary Summarise(const ref::CheckResult& c)
 {
-  return ErrorSummary{c.agree, c.ties, c.wrong, c.maxRelTErr, c.meanRelTErr};
+  return ErrorSummary{c.agree, c.ties, c.flips, c.wrong, c.maxRelTErr, c.meanRelTErr};
 }
 
 }  // namespace

@@ -186,13 +186,14 @@ Run RegisterCheck(CLI::App& app)
                      {"rays", r.rays},
                      {"agree", r.agree},
                      {"ties", r.ties},
+                     {"flips", r.flips},
                      {"wrong", r.wrong},
                      {"wrong_missed", r.wrongMissed},
                      {"wrong_farther", r.wrongFarther},
                      {"wrong_not_on_prim", r.wrongNotOnPrim},
                      {"max_rel_t_err", r.maxRelTErr},
                      {"mean_rel_t_err", r.meanRelTErr},
-                     {"tolerance", "delta = 2^-16 (|o|inf + t |d|inf) + 2^-19 S_prim"},
+                     {"tolerance", "delta(t) = 2^-16 (|o|inf + t |d|inf) (docs/TOLERANCE.md)"},
                      {"first_wrong", r.firstWrong},
                      {"first_wrong_why", r.firstWrongWhy}};
     std::cout << j.dump() << std::endl;

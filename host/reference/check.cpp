@@ -14,13 +14,9 @@ namespace {
 
 double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
 
-// The tolerance of check.h: the ray's magnitudes up to t, plus the scale of
-// the primitive involved (its own coordinates enter the float computation).
-double Delta(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, double t)
-{
-  double tt = std::isfinite(t) ? std::max(t, 0.0) : 0.0;
-  return kCheckRelTol * (MaxAbs(r.o) + tt * MaxAbs(r.d)) + kCheckPrimTol * tr.PrimScale(prim);
-}
+// The tolerance of check.h at t: the ray's magnitudes up to t, nothing of
+// the scene or the primitive.
+double Delta(const DRay& r, double t) { return CheckDelta(MaxAbs(r.o), MaxAbs(r.d), t); }
 
 // Does the ray meet primitive `prim` (any piece) in [tmin, tmax]?
 bool MeetsPrim(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, std::vector<std::uint32_t>& pieces)
@@ -105,10 +101,7 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
   const Scene& scene = tr.GetScene();
   const PrimCounts n = scene.Counts();
   const double dl = glm::length(r.d);
-  const double scale = tr.PrimScale(prim);
-  auto delta = [&](double t) {
-    return kCheckRelTol * (MaxAbs(r.o) + std::max(t, 0.0) * MaxAbs(r.d)) + kCheckPrimTol * scale;
-  };
+  auto delta = [&](double t) { return Delta(r, t); };
   std::vector<std::uint32_t> pieces;
   tr.PiecesOf(prim, pieces);
   for (std::uint32_t g : pieces) {
@@ -166,37 +159,38 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   *relErr = -1.0;
   const bool testHit = hit.prim != CR_NO_HIT;
   if (testHit && hit.prim >= scene.NumPrims()) return Verdict::WrongNotOnPrim;
+  // A reported miss (or "free") where the reference hits: a flip, excused
+  // only when every surface on the ray is marginal.
+  auto missVerdict = [&]() {
+    tr.AllHits(r, all);
+    for (const RefHit& h : all)
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+    return Verdict::Flip;
+  };
 
   if (occlusion) {
     RefHit any = tr.IntersectP(r);
     if (testHit) {
       std::vector<std::uint32_t> pieces;
       if (MeetsPrim(tr, hit.prim, r, pieces)) return Verdict::Agree;
-      // Scale delta by where the primitive is along the ray.
+      // Scale delta by where the primitive is along the ray (NearRay scales
+      // it point by point).
       double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
-      return PossiblyMeets(tr, hit.prim, r, Delta(tr, hit.prim, r, far)) || NearRay(tr, hit.prim, r)
-                 ? Verdict::Tie
-                 : Verdict::WrongNotOnPrim;
+      const bool near = PossiblyMeets(tr, hit.prim, r, Delta(r, far)) || NearRay(tr, hit.prim, r);
+      if (!near) return Verdict::WrongNotOnPrim;
+      // Occluded is the right answer when the reference finds an occluder
+      // too (the named one is off by less than delta: a tie); when it finds
+      // none, occluded against free is a flip.
+      return any.Found() ? Verdict::Tie : Verdict::Flip;
     }
     if (!any.Found()) return Verdict::Agree;
-    tr.AllHits(r, all);
-    for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(tr, scene.IdOfUnified(h.g), r, h.t)))
-        return Verdict::WrongMissed;
-    return Verdict::Tie;
+    return missVerdict();
   }
 
   RefHit ref = tr.Intersect(r);
-  if (!testHit) {
-    if (!ref.Found()) return Verdict::Agree;
-    tr.AllHits(r, all);
-    for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(tr, scene.IdOfUnified(h.g), r, h.t)))
-        return Verdict::WrongMissed;
-    return Verdict::Tie;
-  }
+  if (!testHit) return ref.Found() ? missVerdict() : Verdict::Agree;
   const double t = hit.t;
-  const double delta = Delta(tr, hit.prim, r, t);
+  const double delta = Delta(r, t);
   if (ref.Found() && scene.IdOfUnified(ref.g) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
     *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
     return Verdict::Agree;
@@ -205,12 +199,15 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   if (!(t >= r.tmin - delta / dl && (t <= r.tmax + delta / dl))) return Verdict::WrongNotOnPrim;
   const glm::dvec3 p = r.o + t * r.d;
   if (!(tr.DistanceToPrim(hit.prim, p) <= delta)) return Verdict::WrongNotOnPrim;
+  // A hit where the reference finds none: the ray passes within delta of
+  // the reported surface, a flip.
+  if (!ref.Found()) return Verdict::Flip;
   // Nothing robust may lie before it.
   tr.AllHits(r, all);
   for (const RefHit& h : all) {
     const std::uint32_t hp = scene.IdOfUnified(h.g);
-    if ((t - h.t) * dl <= std::max(delta, Delta(tr, hp, r, h.t))) continue;
-    if (!Marginal(tr, hp, r, h.t, Delta(tr, hp, r, h.t))) return Verdict::WrongFarther;
+    if ((t - h.t) * dl <= std::max(delta, Delta(r, h.t))) continue;
+    if (!Marginal(tr, hp, r, h.t, Delta(r, h.t))) return Verdict::WrongFarther;
   }
   return Verdict::Tie;
 }
@@ -234,11 +231,12 @@ CheckResult CheckHits(const ReferenceTracer& tr, const std::vector<RayRecord>& r
     switch (v) {
       case Verdict::Agree: ++res.agree; break;
       case Verdict::Tie: ++res.ties; break;
+      case Verdict::Flip: ++res.flips; break;
       case Verdict::WrongMissed: ++res.wrongMissed; break;
       case Verdict::WrongFarther: ++res.wrongFarther; break;
       case Verdict::WrongNotOnPrim: ++res.wrongNotOnPrim; break;
     }
-    if (v != Verdict::Agree && v != Verdict::Tie) {
+    if (IsWrong(v)) {
       ++res.wrong;
       if (res.firstWrong.size() < 16) {
         res.firstWrong.push_back(i);

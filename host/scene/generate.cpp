@@ -39,7 +39,7 @@ void AddTriangle(Scene& s, const glm::dvec3& a, const glm::dvec3& b, const glm::
     t.v1[k] = float(b[k]);
     t.v2[k] = float(c[k]);
   }
-  t.flags = CR_TRI_REPORT_UV;
+  t.flags = CR_TRI_REPORT_UV | TriangleEdgeFlags(t);
   s.triangleIds.push_back(s.NumPrims());
   s.triangles.push_back(t);
   s.prims.push_back(info);

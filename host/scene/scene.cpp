@@ -112,6 +112,30 @@ std::uint32_t Scene::CountKind(PrimKind kind) const
   return static_cast<std::uint32_t>(std::count_if(prims.begin(), prims.end(), [&](const PrimInfo& p) { return p.kind == kind; }));
 }
 
+namespace {
+
+// Is the segment pq longer than 16 times its distance from the origin? The
+// endpoints in a fixed order, so that pq and qp give the same answer.
+bool LongEdge(const float* p, const float* q)
+{
+  glm::dvec3 a(p[0], p[1], p[2]), b(q[0], q[1], q[2]);
+  if (b.x < a.x || (b.x == a.x && (b.y < a.y || (b.y == a.y && b.z < a.z)))) std::swap(a, b);
+  const glm::dvec3 e = b - a;
+  const double len2 = glm::dot(e, e);
+  if (len2 == 0.0) return false;
+  const double s = std::clamp(-glm::dot(a, e) / len2, 0.0, 1.0);
+  const glm::dvec3 closest = a + s * e;
+  return len2 > 256.0 * glm::dot(closest, closest);
+}
+
+}  // namespace
+
+std::uint32_t TriangleEdgeFlags(const Triangle& t)
+{
+  return (LongEdge(t.v1, t.v2) ? CR_TRI_LONG_U : 0u) | (LongEdge(t.v2, t.v0) ? CR_TRI_LONG_V : 0u) |
+         (LongEdge(t.v0, t.v1) ? CR_TRI_LONG_W : 0u);
+}
+
 bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& verts, const std::vector<glm::vec3>* normals,
                 std::uint32_t material, std::uint32_t line, const std::string& file, bool warnIfDegenerate)
 {
@@ -141,7 +165,7 @@ bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& vert
       piece.v1[a] = static_cast<float>(verts[t[1]][a]);
       piece.v2[a] = static_cast<float>(verts[t[2]][a]);
     }
-    piece.flags = verts.size() == 3 ? CR_TRI_REPORT_UV : 0u;
+    piece.flags = (verts.size() == 3 ? CR_TRI_REPORT_UV : 0u) | TriangleEdgeFlags(piece);
     scene.triangles.push_back(piece);
     scene.triangleIds.push_back(id);
     if (normals) {

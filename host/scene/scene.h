@@ -122,6 +122,13 @@ Scene LoadOBJ(const std::string& path);
 // (an OBJ's .view file holds only v, b, l and comments).
 void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool viewOnly = false);
 
+// The CR_TRI_LONG_* bits of a triangle (kernels/types.h): its edges longer
+// than 16 times their distance from the world origin. Robust mode checks the
+// float edge functions of those edges against an error bound; the bits
+// depend on each edge's two vertices only (in either order), so triangles
+// sharing an edge agree. docs/TOLERANCE.md derives the factor.
+std::uint32_t TriangleEdgeFlags(const Triangle& t);
+
 // Adds a polygon (or patch, with normals) statement, triangulating it; used by
 // the loaders. Returns false (after a warning) when it is degenerate.
 bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& verts,

@@ -1,0 +1,311 @@
+// Huge primitives and mixed scales: the classic ground made of a sphere of
+// radius ~1e6 whose centre lies a million units below the camera, triangles
+// 1e6 across seen from 10..100 away, a cylinder of radius 1e6 used the same
+// way, and scenes mixing such primitives with features of 1e-4.
+//
+// What these test. A float intersector that subtracts the primitive's own
+// coordinates (o - c for a sphere centred 1e6 away, v - o for a vertex 5e5
+// away) rounds at the spacing of those coordinates, 0.06 at 1e6, while the
+// hit lies 10..100 units from the ray origin: t comes out with a relative
+// error of 1e-4..1e-3 (|f|^2 - r^2 alone loses 16 bits for the ground
+// sphere). check.h's tolerance belongs to the ray and its hit (2^-16 of
+// |o| + t |d|), not to the primitive's size, so such an error is wrong, and
+// a small object sitting on the ground can be hidden behind a ground hit
+// placed in front of it. Robust mode computes what cancels in double-float
+// (kernels/intersect.h), so its t stays within a few ulps.
+//
+// Expectations: rays whose reference hit is robust (the surface met at an
+// angle, away from triangle edges and cone rims) must report that
+// primitive with t within 2^-20 relative of the reference's; all others the
+// reference's answer under check.h.
+#include <cmath>
+
+#include "bench/hard_gen.h"
+#include "reference/reference.h"
+
+namespace cr::hard {
+
+namespace {
+
+constexpr double kRelTolT = 0x1p-20;
+constexpr double kPi = 3.14159265358979323846;
+
+// Target id of one ray from the reference: the primitive it hits, when the
+// hit is robust (|cos| of the angle to the normal >= minCos, and on
+// triangles every barycentric >= edgeFrac, on cones the axial position
+// inside the rim by edgeFrac of the height); else kAnyPrim.
+std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec, double minCos, double edgeFrac)
+{
+  const ref::DRay r = ref::MakeRay(rec);
+  const ref::RefHit h = tr.Intersect(r);
+  if (!h.Found()) return kAnyPrim;
+  const Scene& scene = tr.GetScene();
+  const PrimCounts n = scene.Counts();
+  const glm::dvec3 p = r.o + h.t * r.d;
+  const double c = std::fabs(glm::dot(tr.GeometricNormal(h.g, p), glm::normalize(r.d)));
+  if (c < minCos) return kAnyPrim;
+  if (h.g >= n.nSpheres && h.g < n.nSpheres + n.nTriangles) {
+    if (std::min({h.u, h.v, 1.0 - h.u - h.v}) < edgeFrac) return kAnyPrim;
+  } else if (h.g >= n.nSpheres + n.nTriangles) {
+    const Cone& cn = scene.cones[h.g - n.nSpheres - n.nTriangles];
+    const glm::dvec3 b = D(cn.base), w = D(cn.apex) - b;
+    const double s = glm::dot(p - b, w) / glm::dot(w, w);
+    if (s < edgeFrac || s > 1.0 - edgeFrac) return kAnyPrim;
+  }
+  return scene.IdOfUnified(h.g);
+}
+
+// Fills c.target from the reference (RobustTarget per ray).
+void SetTargets(HardCase& c, double minCos, double edgeFrac)
+{
+  const ref::ReferenceTracer tr(*c.scene);
+  c.target.resize(c.rays.size());
+  for (std::size_t i = 0; i < c.rays.size(); ++i) c.target[i] = RobustTarget(tr, c.rays[i], minCos, edgeFrac);
+}
+
+// Unit vector at polar angle theta from axis n (unit), azimuth phi.
+glm::dvec3 AroundAxis(const glm::dvec3& n, double theta, double phi)
+{
+  const glm::dvec3 a = std::fabs(n.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  const glm::dvec3 e1 = glm::normalize(glm::cross(n, a)), e2 = glm::cross(n, e1);
+  return std::cos(theta) * n + std::sin(theta) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+}
+
+// A ground sphere: centre R0 below the origin along -up, radius R0 - 1 (its
+// top one unit below the origin). Cameras at heights 10, 30 and 100 above the
+// top, some beside the top point, looking down at every angle up to past the
+// horizon (those rays miss), plus rays aimed at points of the ground 1..1e4
+// away. `up` is exact in float times R0 (e.g. (0.6, 0.8, 0): centre
+// (-6e5, -8e5, 0)).
+HardCase GroundSphere(const char* name, double R0, const glm::dvec3& up, const GenOptions& o)
+{
+  Rng rng(501);
+  SceneBuilder b;
+  const glm::dvec3 centre = -R0 * up;
+  b.Sphere(centre, R0 - 1.0);
+  HardCase c;
+  c.name = name;
+  c.scene = b.Finish();
+  c.expect = Expect::Target;
+  c.relTolT = kRelTolT;
+  const std::size_t n = o.quick ? 1500 : 15000;
+  const double heights[] = {10.0, 30.0, 100.0};
+  const glm::dvec3 side = glm::normalize(glm::cross(up, glm::dvec3(0.0, 0.0, 1.0) + 0.3 * up));
+  for (std::size_t k = 0; k < n; ++k) {
+    const double h = heights[k % 3];
+    // Camera over the top point, or up to 1000 units beside it (still h
+    // above the surface, to first order).
+    const double off = (k / 3) % 2 == 0 ? 0.0 : rng.Uniform(-1000.0, 1000.0);
+    const glm::dvec3 foot = centre + (R0 - 1.0) * glm::normalize(-centre + off * side);
+    const glm::dvec3 nrm = glm::normalize(foot - centre);
+    const glm::dvec3 cam = foot + h * nrm;
+    glm::dvec3 dir;
+    if (k % 4 == 3) {
+      // Aimed at a ground point 1..1e4 away along the surface.
+      const double dist = std::exp(rng.Uniform(0.0, std::log(1e4)));
+      const glm::dvec3 tang = AroundAxis(nrm, kPi / 2, rng.Uniform(0.0, 2 * kPi));
+      const glm::dvec3 g = centre + (R0 - 1.0) * glm::normalize(foot + dist * tang - centre);
+      dir = g - cam;
+    } else {
+      // Polar angle from the nadir up to 95 degrees (the horizon of h = 10
+      // lies at 89.8 degrees).
+      const double theta = kPi * rng.Uniform(0.0, 95.0 / 180.0);
+      dir = AroundAxis(-nrm, theta, rng.Uniform(0.0, 2 * kPi)) * rng.Uniform(0.5, 4.0);
+    }
+    c.rays.push_back(Rec(cam, dir));
+  }
+  SetTargets(c, 0.05, 0.0);
+  return c;
+}
+
+// Two triangle statements forming a quad 1e6 across in a tilted plane one
+// unit below the origin, the shared diagonal passing under the cameras;
+// cameras 10..100 above the plane near the origin and 3e5 away from it.
+HardCase TiltedTriangles(const GenOptions& o)
+{
+  Rng rng(502);
+  const glm::dvec3 nrm = glm::normalize(glm::dvec3(0.28, 0.96, 0.17));
+  const glm::dvec3 e1 = glm::normalize(glm::cross(nrm, glm::dvec3(0, 0, 1)));
+  const glm::dvec3 e2 = glm::cross(nrm, e1);
+  const glm::dvec3 p0 = -1.0 * nrm;
+  const double H = 5e5;
+  const glm::dvec3 q00 = p0 - H * e1 - H * e2, q10 = p0 + H * e1 - H * e2, q11 = p0 + H * e1 + H * e2,
+                   q01 = p0 - H * e1 + H * e2;
+  SceneBuilder b;
+  b.Triangle(q00, q10, q11);
+  b.Triangle(q00, q11, q01);
+  // A second pair, steeper, 2e6 across, far to one side: the cameras near it
+  // have |o| ~ 3e5.
+  const glm::dvec3 n2 = glm::normalize(glm::dvec3(-0.5, 0.7, 0.5));
+  const glm::dvec3 f1 = glm::normalize(glm::cross(n2, glm::dvec3(1, 0, 0))), f2 = glm::cross(n2, f1);
+  const glm::dvec3 p2 = glm::dvec3(3e5, -2e5, 1e5);
+  b.Triangle(p2 - 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 + 1e6 * f2);
+  b.Triangle(p2 - 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 + 1e6 * f2, p2 - 1e6 * f1 + 1e6 * f2);
+  HardCase c;
+  c.name = "huge/tilted-triangles";
+  c.scene = b.Finish();
+  c.expect = Expect::Target;
+  c.relTolT = kRelTolT;
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const bool second = k % 3 == 2;
+    const glm::dvec3 pn = second ? n2 : nrm, pa = second ? f1 : e1, pb = second ? f2 : e2;
+    const glm::dvec3 base = second ? p2 + rng.Uniform(-50.0, 50.0) * pa : p0;
+    const double h = std::exp(rng.Uniform(std::log(10.0), std::log(100.0)));
+    // The camera beside the diagonal (pa + pb direction) by up to 30 units.
+    const glm::dvec3 cam = base + h * pn + rng.Uniform(-30.0, 30.0) * glm::normalize(pa - pb);
+    glm::dvec3 target;
+    if (k % 5 == 0) {
+      // A point of the shared diagonal (exactly on it up to rounding).
+      target = base + rng.Uniform(-300.0, 300.0) * glm::normalize(pa + pb);
+    } else {
+      const double dist = std::exp(rng.Uniform(0.0, std::log(3000.0)));
+      const double phi = rng.Uniform(0.0, 2 * kPi);
+      target = base + dist * (std::cos(phi) * pa + std::sin(phi) * pb);
+    }
+    c.rays.push_back(Rec(cam, (target - cam) * rng.Uniform(0.5, 2.0)));
+  }
+  // Edges: a barycentric below 1e-7 (0.1 units of a 1e6 triangle) is near
+  // the diagonal; those rays are judged as the reference's answer.
+  SetTargets(c, 0.05, 1e-7);
+  return c;
+}
+
+// A cylinder of radius 1e6 - 1 lying along z a million units below, as a
+// ground, and a thin cone 1e6 long (radius 1 to 2) seen from 20..100 away.
+HardCase HugeCones(const GenOptions& o)
+{
+  Rng rng(503);
+  SceneBuilder b;
+  const double R0 = 1e6;
+  b.Cone({0.0, -R0, -R0}, R0 - 1.0, {0.0, -R0, R0}, R0 - 1.0);
+  b.Cone({-5e5, 50.0, -200.0}, 1.0, {5e5, 50.0, -200.0}, 2.0);
+  HardCase c;
+  c.name = "huge/cones";
+  c.scene = b.Finish();
+  c.expect = Expect::Target;
+  c.relTolT = kRelTolT;
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    glm::dvec3 cam, dir;
+    if (k % 2 == 0) {
+      // Down at the cylinder ground from 10..100 above its top line.
+      cam = {rng.Uniform(-500.0, 500.0), std::exp(rng.Uniform(std::log(10.0), std::log(100.0))),
+             rng.Uniform(-1e4, 1e4)};
+      const double theta = kPi * rng.Uniform(0.0, 95.0 / 180.0);
+      dir = AroundAxis({0.0, -1.0, 0.0}, theta, rng.Uniform(0.0, 2 * kPi));
+    } else {
+      // At the thin cone, from 20..100 away, at points along 2000 units of it.
+      const double x = rng.Uniform(-1000.0, 1000.0);
+      const double rad = 1.0 + (x + 5e5) / 1e6;
+      const glm::dvec3 axisPt(x, 50.0, -200.0);
+      const glm::dvec3 aim = axisPt + AroundAxis({1.0, 0.0, 0.0}, kPi / 2, rng.Uniform(0.0, 2 * kPi)) *
+                                         (rad * rng.Uniform(0.0, 1.3));
+      cam = axisPt + AroundAxis({1.0, 0.0, 0.0}, kPi / 2, rng.Uniform(0.0, 2 * kPi)) * rng.Uniform(20.0, 100.0) +
+            glm::dvec3(rng.Uniform(-50.0, 50.0), 0.0, 0.0);
+      dir = aim - cam;
+    }
+    c.rays.push_back(Rec(cam, dir));
+  }
+  SetTargets(c, 0.05, 1e-6);
+  return c;
+}
+
+// Features of 1e-4 on huge ground primitives: a ground sphere (R0 = 1e6) and
+// a huge tilted triangle pair beside it, with spheres of radius 1e-4,
+// triangles 2e-4 across and a thin cylinder of radius 1e-4 standing on the
+// ground near the origin; cameras 0.01..1 away, rays aimed at the small
+// features and the ground between them.
+HardCase Mixed(const GenOptions& o)
+{
+  Rng rng(504);
+  SceneBuilder b;
+  const double R0 = 1e6;
+  const glm::dvec3 centre(0.0, -R0, 0.0);
+  b.Sphere(centre, R0);  // top at y = 0
+  // The ground continues as a tilted plane from x = 5 on (it cuts the sphere
+  // there), 1e6 across.
+  const glm::dvec3 tn = glm::normalize(glm::dvec3(-0.05, 1.0, 0.02));
+  const glm::dvec3 t1 = glm::normalize(glm::cross(tn, glm::dvec3(0, 0, 1))), t2 = glm::cross(tn, t1);
+  const glm::dvec3 tp(5.0, 0.0, 0.0);
+  b.Triangle(tp - 5e5 * t1 - 5e5 * t2, tp + 5e5 * t1 - 5e5 * t2, tp + 5e5 * t1 + 5e5 * t2);
+  std::vector<glm::dvec3> feature;
+  for (int i = 0; i < 12; ++i) {
+    const double x = rng.Uniform(-0.05, 0.05), z = rng.Uniform(-0.05, 0.05);
+    // The sphere's surface height at (x, z): -(x^2 + z^2) / (2 R0) to first order.
+    const double y = -(x * x + z * z) / (2.0 * R0);
+    const glm::dvec3 g(x, y, z);
+    switch (i % 3) {
+      case 0: b.Sphere(g + glm::dvec3(0.0, 1e-4, 0.0), 1e-4); break;
+      case 1: b.Triangle(g + glm::dvec3(-1e-4, 0.0, 0.0), g + glm::dvec3(1e-4, 0.0, 0.0), g + glm::dvec3(0.0, 2e-4, 1e-4)); break;
+      default: b.Cone(g - glm::dvec3(0.0, 1e-4, 0.0), 1e-4, g + glm::dvec3(0.0, 3e-4, 0.0), 1e-4); break;
+    }
+    feature.push_back(g + glm::dvec3(0.0, 1e-4, 0.0));
+  }
+  HardCase c;
+  c.name = "huge/mixed-scales";
+  c.scene = b.Finish();
+  c.expect = Expect::Target;
+  c.relTolT = kRelTolT;
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const glm::dvec3 f = feature[k % feature.size()];
+    const double dist = std::exp(rng.Uniform(std::log(0.01), std::log(1.0)));
+    // From above at 10..80 degrees of elevation.
+    const glm::dvec3 from = AroundAxis({0.0, 1.0, 0.0}, kPi * rng.Uniform(10.0, 80.0) / 180.0, rng.Uniform(0.0, 2 * kPi));
+    const glm::dvec3 cam = f + dist * from;
+    const glm::dvec3 aim = f + rng.Uniform(0.0, 3e-4) * AroundAxis({0.0, 1.0, 0.0}, kPi / 2, rng.Uniform(0.0, 2 * kPi)) +
+                           glm::dvec3(0.0, rng.Uniform(-1e-4, 1e-4), 0.0);
+    c.rays.push_back(Rec(cam, aim - cam));
+  }
+  SetTargets(c, 0.05, 1e-3);
+  return c;
+}
+
+}  // namespace
+
+void AddHugeCases(std::vector<CaseSpec>& specs)
+{
+  const char* expect =
+      " Expect: rays whose reference hit is robust (met at more than 3 degrees from the tangent plane, away from "
+      "edges and rims) the primitive's id and t within 2^-20 relative of the reference's; all others the "
+      "reference's answer under check.h's tolerance.";
+  specs.push_back({"huge/ground-sphere-1e6", "huge",
+                   std::string("A ground sphere: centre 1e6 below the origin, radius 1e6 - 1; cameras 10, 30 and 100 "
+                               "above it, over its top and up to 1000 beside it; rays down at every angle to past "
+                               "the horizon, and aimed at ground points 1..1e4 away.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) {
+                     return GroundSphere("huge/ground-sphere-1e6", 1e6, {0.0, 1.0, 0.0}, o);
+                   }});
+  specs.push_back({"huge/ground-sphere-tilted", "huge",
+                   std::string("As ground-sphere-1e6 with the centre in general position, (-6e5, -8e5, 0).") + expect,
+                   false, [](AccelKind, const GenOptions& o) {
+                     return GroundSphere("huge/ground-sphere-tilted", 1e6, {0.6, 0.8, 0.0}, o);
+                   }});
+  specs.push_back({"huge/ground-sphere-1e7", "huge",
+                   std::string("As ground-sphere-1e6 with the centre 1e7 below (float spacing 1 at the centre).") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) {
+                     return GroundSphere("huge/ground-sphere-1e7", 1e7, {0.0, 1.0, 0.0}, o);
+                   }});
+  specs.push_back({"huge/tilted-triangles", "huge",
+                   std::string("Two quads of two triangle statements each, 1e6 and 2e6 across, in tilted planes, one "
+                               "through the origin's neighbourhood and one 3e5 away; cameras 10..100 above them and "
+                               "beside the shared diagonal, rays at points 1..3000 away and at the diagonal.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return TiltedTriangles(o); }});
+  specs.push_back({"huge/cones", "huge",
+                   std::string("A cylinder of radius 1e6 - 1 along z as a ground (axis 1e6 below), and a cone 1e6 "
+                               "long of radius 1 to 2 seen from 20..100 away.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return HugeCones(o); }});
+  specs.push_back({"huge/mixed-scales", "huge",
+                   std::string("Spheres of radius 1e-4, triangles 2e-4 across and cylinders of radius 1e-4 standing on a "
+                               "ground sphere of radius 1e6, next to a tilted triangle 1e6 across; cameras 0.01..1 "
+                               "away, rays aimed at the features.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return Mixed(o); }});
+}
+
+}  // namespace cr::hard
