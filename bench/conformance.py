@@ -3,7 +3,7 @@
 trace it with each structure x backend, and check every answer against the
 fp64 reference. Prints a Markdown table (and JSON lines with --json).
 
-  bench/conformance.py [--scenes balls,gears,...|spd|meshes|all] [--accels grid,octree,bvh]
+  bench/conformance.py [--scenes balls,gears,...|spd|meshes|scale|all] [--accels grid,octree,bvh]
                        [--backends scalar,simd:sse4,opencl:packet,...] [--kinds primary,shadow,diffuse,random]
                        [--rays 262144] [--bin build/release/bin/cellray]
 
@@ -21,11 +21,14 @@ from benchlib import ROOT, run
 
 SPD = ["balls", "gears", "jacks", "lattice", "mount", "rings", "shells", "sombrero", "teapot", "tetra", "tree"]
 MESHES = ["bunny", "dragon100k", "igea", "sponza", "sibenik", "conference"]
+SCALE = ["ground-sphere", "ground-quad", "mixed-scales"]
 
 
 def scene_path(name):
     if name in MESHES:
         return os.path.join(ROOT, "..", "shared", "scenes", "meshes", name + ".obj")
+    if name in SCALE:
+        return os.path.join(ROOT, "scenes", "scale", name + ".nff")
     if os.path.exists(name):
         return name
     return os.path.join(ROOT, "scenes", "spd", name + ".nff")
@@ -42,7 +45,8 @@ def main():
     ap.add_argument("--bin", default=os.path.join(ROOT, "build", "release", "bin", "cellray"))
     ap.add_argument("--json", action="store_true", help="also print one JSON line per row")
     a = ap.parse_args()
-    scenes = {"spd": SPD, "meshes": MESHES, "all": SPD + MESHES}.get(a.scenes, a.scenes.split(","))
+    scenes = {"spd": SPD, "meshes": MESHES, "scale": SCALE, "all": SPD + MESHES + SCALE}.get(a.scenes,
+                                                                                       a.scenes.split(","))
     side = int(math.ceil(math.sqrt(a.rays)))
     total_wrong = 0
     print("| scene | kind | rays | accel | backend | agree | ties | flips | wrong | max rel t err | Mrays/s |")

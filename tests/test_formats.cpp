@@ -138,7 +138,7 @@ TEST_CASE("check: the reference agrees with itself; every corrupted answer is re
   }
   auto r = ref::CheckHits(ref, rays, hits, false);
   CHECK(r.wrong == corrupted.size());
-  CHECK(r.agree + r.ties + r.wrong == rays.size());
+  CHECK(r.agree + r.ties + r.flips + r.wrong == rays.size());
   const std::size_t listed = std::min<std::size_t>(16, corrupted.size());
   CHECK(std::vector<std::uint64_t>(r.firstWrong.begin(), r.firstWrong.end()) ==
         std::vector<std::uint64_t>(corrupted.begin(), corrupted.begin() + listed));
@@ -156,9 +156,68 @@ TEST_CASE("check: the reference agrees with itself; every corrupted answer is re
       ++blocked;
     }
   REQUIRE(blocked > 0);
-  // A shadow ray that only grazes its occluder (within the tolerance) is
-  // legitimately a tie when reported free; all others must be wrong.
+  // A shadow ray that only grazes its occluder (within the tolerance) is a
+  // flip when reported free, never a tie; all others must be wrong.
   auto oc = ref::CheckHits(ref, shadow, occ, true);
-  CHECK(oc.wrong + oc.ties == blocked);
+  CHECK(oc.ties == 0);
+  CHECK(oc.wrong + oc.flips == blocked);
   CHECK(oc.wrong >= blocked - blocked / 50);
+}
+
+TEST_CASE("check: the tolerance belongs to the ray and its hit, not to the primitive; flips are never agreement")
+{
+  // A ground sphere of radius 1e6 (top at y = 0) and a unit sphere on it.
+  Scene scene;
+  ParseNFF("v\nfrom 0 20 40\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 8 8\n"
+           "f 1 1 1 1 0 0 0 0\ns 0 -1000000 0 1000000\ns 0 1 0 1\n",
+           "ground", scene);
+  const ref::ReferenceTracer tr(scene);
+  auto verdict = [&](const RayRecord& ray, const HitRecord& hit, bool occlusion) {
+    std::vector<ref::RefHit> scratch;
+    double rel = 0.0;
+    return ref::Adjudicate(tr, ray, hit, occlusion, &rel, scratch);
+  };
+  // Down at the ground 13 units from the camera's foot.
+  const RayRecord down{{0.0f, 20.0f, 40.0f}, 0.0f, {5.0f, -20.0f, -28.0f}, INFINITY};
+  const ref::RefHit h = tr.Intersect(ref::MakeRay(down));
+  REQUIRE(h.Found());
+  REQUIRE(scene.IdOfUnified(h.g) == 0u);
+  const double t = h.t;
+  // 1e-6 relative is within 2^-16 (|o| + t |d|); 1e-4 is not, although the
+  // old tolerance (2^-19 of the primitive's 2e6) allowed 3.8 units.
+  CHECK(verdict(down, HitRecord{float(t * (1.0 + 1e-6)), 0u, 0, 0}, false) == ref::Verdict::Agree);
+  CHECK(ref::IsWrong(verdict(down, HitRecord{float(t * (1.0 + 1e-4)), 0u, 0, 0}, false)));
+  CHECK(ref::IsWrong(verdict(down, HitRecord{float(t * (1.0 - 1e-4)), 0u, 0, 0}, false)));
+  CHECK(ref::CheckDelta(40.0, 28.0, t) == doctest::Approx(0x1p-16 * (40.0 + 28.0 * t)));
+
+  // Exactly tangent to the top of the unit sphere, the ground far below:
+  // the reference hits (a double root); a reported miss is a flip, counted
+  // apart, never agreement or a tie.
+  const RayRecord tangent{{-5.0f, 2.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 10.0f};
+  REQUIRE(tr.Intersect(ref::MakeRay(tangent)).Found());
+  const HitRecord miss{INFINITY, CR_NO_HIT, 0, 0};
+  CHECK(verdict(tangent, miss, false) == ref::Verdict::Flip);
+  CHECK(verdict(tangent, miss, true) == ref::Verdict::Flip);
+  // Through the unit sphere's centre: a miss is wrong, in both queries.
+  const RayRecord through{{-5.0f, 1.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 10.0f};
+  CHECK(verdict(through, miss, false) == ref::Verdict::WrongMissed);
+  CHECK(verdict(through, miss, true) == ref::Verdict::WrongMissed);
+  // Passing 1e-7 above the tangent (a miss for the reference): a reported
+  // hit there is a flip; 0.01 above it, wrong.
+  const RayRecord above{{-5.0f, 2.0000002f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 10.0f};
+  REQUIRE(!tr.Intersect(ref::MakeRay(above)).Found());
+  CHECK(verdict(above, HitRecord{5.0f, 1u, 0, 0}, false) == ref::Verdict::Flip);
+  CHECK(verdict(above, HitRecord{0.0f, 1u, 0, 0}, true) == ref::Verdict::Flip);
+  const RayRecord clear{{-5.0f, 2.01f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, 10.0f};
+  CHECK(ref::IsWrong(verdict(clear, HitRecord{5.0f, 1u, 0, 0}, false)));
+  CHECK(ref::IsWrong(verdict(clear, HitRecord{0.0f, 1u, 0, 0}, true)));
+
+  // CheckHits counts flips apart and sums every verdict to the ray count.
+  const std::vector<RayRecord> rays = {down, tangent, through, above};
+  const std::vector<HitRecord> hits = {HitRecord{float(t), 0u, 0, 0}, miss, miss, HitRecord{5.0f, 1u, 0, 0}};
+  const ref::CheckResult r = ref::CheckHits(tr, rays, hits, false);
+  CHECK(r.agree == 1);
+  CHECK(r.flips == 2);
+  CHECK(r.wrong == 1);
+  CHECK(r.ties == 0);
 }

@@ -96,6 +96,34 @@ TEST_CASE("a convex opaque object lit from outside never shadows itself")
   }
 }
 
+TEST_CASE("a huge ground (a sphere of radius 1e6, a quad 2e6 across) neither shadows itself nor loses contact shadows")
+{
+  // A unit sphere resting on the ground, lit from straight above: the ground
+  // point under it is in its shadow. The float offset bound of a primitive
+  // 1e6 in size (SurfacePoint::error, 4 units here) would start that shadow
+  // ray above the sphere; robust tracers need only a few ulps of the point.
+  const char* view = "b 0 0 0\nv\nfrom 0 6 12\nat 0 0.5 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 64 64\n"
+                     "l 0 100 0\nf 0.8 0.8 0.8 1 0 1 0 0\n";
+  const std::string grounds[] = {"s 0 -1000000 0 1000000\n",
+                                 "p 4\n-1000000 0 -1000000\n-1000000 0 1000000\n1000000 0 1000000\n1000000 0 -1000000\n"};
+  for (const std::string& ground : grounds) {
+    for (Backend backend : {Backend::Scalar, Backend::Simd}) {
+      Scene scene;
+      ParseNFF(std::string(view) + ground + "s 0 1 0 1\n", "ground", scene);
+      RenderOptions ro;
+      RenderStats st;
+      RenderWith(scene, backend, AccelKind::BVH, ro, &st);
+      INFO(ground, " ", BackendName(backend), ": ", st.shadowRays, " shadow rays, ", st.shadowHits, " blocked");
+      CHECK(st.selfShadowed == 0u);
+      // Only the ground near the sphere's foot can be blocked (the sphere's
+      // upper half sees the light, its lower half casts no shadow ray): with
+      // the float bound every ground shadow ray would start above the sphere
+      // and none would be blocked.
+      CHECK(st.shadowHits > 10u);
+    }
+  }
+}
+
 TEST_CASE("images agree across structures and backends (PSNR >= 60 dB) and with the reference")
 {
   const AccelKind accels[] = {AccelKind::BVH};

@@ -189,7 +189,10 @@ TEST_CASE("NFF statements: lights with colour, cones, negative radii, patches, i
   CHECK(s.coneIds == std::vector<std::uint32_t>{1});
   REQUIRE(s.HasPatchNormals());
   CHECK(s.triNormals[0][0] == glm::vec3(0, 0, 1));
-  CHECK(s.triangles[0].flags == CR_TRI_REPORT_UV);
+  // The patch has a vertex at the origin: its two edges from there are long
+  // (longer than 16 times their distance from the origin, TriangleEdgeFlags);
+  // the quad at z = 5 has none.
+  CHECK(s.triangles[0].flags == (CR_TRI_REPORT_UV | CR_TRI_LONG_V | CR_TRI_LONG_W));
   CHECK(s.triangles[1].flags == 0u);
   CHECK(s.materials.size() == 2);
   CHECK(s.prims[0].material == 1);

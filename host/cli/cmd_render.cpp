@@ -53,6 +53,7 @@ Run RegisterRender(CLI::App& app)
     ro.fresnel = o->fresnel;
     ro.seed = o->seed;
     ro.progress = !o->noProgress;
+    ro.robustOffsets = cfg.backend != Backend::Embree && cfg.precision != Precision::Fast;
     if (o->sides == "auto") ro.sides = Sides::Auto;
     else if (o->sides == "one") ro.sides = Sides::One;
     else if (o->sides == "two") ro.sides = Sides::Two;

@@ -99,6 +99,7 @@ class Shader {
     const glm::dvec3 dd(pr.ray.dir[0], pr.ray.dir[1], pr.ray.dir[2]);
     const SurfacePoint sp = SurfaceAt(scene_, g, o + double(hit.t) * dd, hit.u, hit.v);
     const glm::vec3 p = sp.p;
+    const float offset = opt_.robustOffsets ? sp.robustError : sp.error;
     const glm::vec3 d = glm::normalize(glm::vec3(dd));
     glm::vec3 ng = sp.ng, ns = sp.ns;
     const glm::vec3 outward = ng;
@@ -129,7 +130,7 @@ class Shader {
         c += glm::vec3(m.ks * std::pow(rv, m.shine));
       }
       const glm::vec3 side = glm::dot(ng, L) >= 0.0f ? ng : -ng;
-      const glm::vec3 so = OffsetRayOrigin(p, sp.error, side);
+      const glm::vec3 so = OffsetRayOrigin(p, offset, side);
       ShadowRay& s = shadows[l];
       s.ray = MakeRay(so, light.position - so, 1.0f);
       s.light = pr.weight * intensity_ * light.color * c;
@@ -178,14 +179,14 @@ class Shader {
       if (!opt_.spd && kr <= 0.0f) goto refraction;
       glm::vec3 rd = d - 2.0f * glm::dot(d, ns) * ns;
       const glm::vec3 side = glm::dot(rd, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = OffsetRayOrigin(p, sp.error, side);
+      const glm::vec3 ro = OffsetRayOrigin(p, offset, side);
       spawned[nSpawned++] = PathRay{MakeRay(ro, rd, INFINITY), pr.weight * kr * glm::vec3(1.0f), pr.sample,
                                     std::uint8_t(pr.depth + 1), RayType::Reflection};
     }
   refraction:
     if (refract) {
       const glm::vec3 side = glm::dot(refrDir, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = OffsetRayOrigin(p, sp.error, side);
+      const glm::vec3 ro = OffsetRayOrigin(p, offset, side);
       spawned[nSpawned++] = PathRay{MakeRay(ro, refrDir, INFINITY), pr.weight * kt * m.color, pr.sample,
                                     std::uint8_t(pr.depth + 1), RayType::Refraction};
     }

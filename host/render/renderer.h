@@ -28,6 +28,10 @@ struct RenderOptions {
   Sides sides = Sides::Auto;  // Auto: double-sided when the scene has patches (SPD's teapot rule)
   std::uint64_t seed = 1;
   bool progress = false;      // progress bar on stderr
+  // Secondary ray origins offset by SurfacePoint::robustError (a few ulps of
+  // the hit point): right for our robust and fp64 tracers; Embree and the
+  // fast mode need the float bound SurfacePoint::error (scene/surface.h).
+  bool robustOffsets = true;
 };
 
 // Ray counts of a render: how many rays of each kind were cast and how many

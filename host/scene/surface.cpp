@@ -65,6 +65,7 @@ SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pA
   }
   sp.p = glm::vec3(p);
   sp.error = float(0x1p-19 * scale + 0x1p-22 * MaxAbs(p));
+  sp.robustError = float(0x1p-21 * MaxAbs(p) + 0x1p-40 * scale);
   sp.ng = glm::vec3(ng);
   sp.ns = glm::vec3(ns);
   return sp;

@@ -12,7 +12,16 @@
 // origin), so the bound is
 //   error = 2^-19 * S + 2^-22 * |p|_inf,
 // S being the largest coordinate magnitude of the primitive's defining points
-// (the scale the checker's tolerance uses too, host/reference/check.h).
+// (the scale the checker's tolerance used to include too, until it was made
+// the ray's own, docs/TOLERANCE.md). Any float intersector needs that much.
+// Ours need less in robust and fp64 mode: they recompute in double-float
+// what cancels (kernels/intersect.h), so a few ulps of the point itself,
+//   robustError = 2^-21 * |p|_inf + 2^-40 * S
+// (the second term, far below the first unless p lies near the world
+// origin, keeps the move above double-float's own resolution),
+// keep them off the surface they leave, and a shadow ray from a ground
+// sphere of radius 10^6 starts 10^-5 above it instead of 4 units (which
+// would lose the contact shadow of everything smaller than that).
 #pragma once
 
 #include <cstdint>
@@ -25,7 +34,8 @@ namespace cr {
 
 struct SurfacePoint {
   glm::vec3 p{0.0f};   // on the surface, rounded to float
-  float error = 0.0f;  // how far off the surface a float intersector may place it
+  float error = 0.0f;        // how far off the surface a float intersector may place it
+  float robustError = 0.0f;  // the same for our robust and fp64 intersectors
   glm::vec3 ng{0.0f};  // outward geometric normal (unit; inward for inside-visible primitives)
   glm::vec3 ns{0.0f};  // shading normal (unit; patch normals interpolated), on ng's side
 };

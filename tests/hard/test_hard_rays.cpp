@@ -1,6 +1,7 @@
 // Hard cases on ray directions and magnitudes: axis-parallel and near-axis
-// rays, tiny and far spheres, grazing rays (bench/hard_gen_axis.cpp,
-// hard_gen_tinyfar.cpp, hard_gen_grazing.cpp).
+// rays, tiny and far spheres, grazing rays, huge primitives seen from nearby
+// (bench/hard_gen_axis.cpp, hard_gen_tinyfar.cpp, hard_gen_grazing.cpp,
+// hard_gen_huge.cpp).
 #include <cmath>
 
 #include "bench/hard_cases.h"
@@ -78,4 +79,22 @@ TEST_CASE("hard: grazing rays on spheres, cylinders, cones and in the planes of 
     exact += (cx * cx + cy * cy + cz * cz) == double(s.radius) * s.radius * dd;
   }
   CHECK(exact >= c.rays.size() / 6 - 1);
+}
+
+TEST_CASE("hard: huge primitives seen from nearby (ground spheres, triangles 1e6 across, huge cones, mixed scales)")
+{
+  const std::vector<HardCaseResult> results = hard_test::RunAndCheck("huge/");
+  // The cases are what they say: the ground sphere has radius ~1e6, and most
+  // rays have a robust target (the relative t bound of 2^-20 is asserted on
+  // them), not the reference's answer alone.
+  const hard::HardCase g = Make("huge/ground-sphere-1e6");
+  REQUIRE(g.scene->spheres.size() == 1);
+  CHECK(g.scene->spheres[0].radius == 999999.0f);
+  std::size_t targeted = 0;
+  for (std::uint32_t t : g.target) targeted += t == 0;
+  CHECK(targeted > g.rays.size() / 2);
+  // Fast mode (the textbook algorithms) gets most of them wrong: the
+  // tolerance no longer grows with the primitive's size.
+  for (const HardCaseResult& r : results)
+    if (r.precision == Precision::Fast && r.caseName == "huge/ground-sphere-1e6") CHECK(r.wrong > r.rays / 2);
 }
