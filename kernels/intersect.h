@@ -393,6 +393,34 @@ CR_FUNC real Triangle_VertexScale(const Ray* r, const real v[3])
 {
   return (fabs(v[0] - r->org[0]) + fabs(v[1] - r->org[1])) + fabs(v[2] - r->org[2]);
 }
+/* All three edge functions in double-float (Triangle_Intersect's cold path
+ * for a degenerate projection). */
+CR_COLD CR_FUNC void Triangle_EdgesDf(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
+{
+  real v0[3], v1[3], v2[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    v0[i] = tri->v0[i];
+    v1[i] = tri->v1[i];
+    v2[i] = tri->v2[i];
+  }
+  *U = Triangle_EdgeDf(r, v2, v1);
+  *V = Triangle_EdgeDf(r, v0, v2);
+  *W = Triangle_EdgeDf(r, v1, v0);
+}
+/* Whether a float hit's det = U + V + W (twice the sheared projected area)
+ * lies within the rounding of U, V, W: 2^-18 times the products of the
+ * translated vertices' L1 norms (Triangle_RefineEdges' bound), summed over
+ * the edges. Arguments: the translated vertices in the ray's axis order
+ * (kx, ky, kz). */
+CR_FUNC int Triangle_ProjectionUndecided(real ax, real ay, real az, real bx, real by, real bz, real cx, real cy,
+                                         real cz, real det)
+{
+  const real nA = (fabs(ax) + fabs(ay)) + fabs(az);
+  const real nB = (fabs(bx) + fabs(by)) + fabs(bz);
+  const real nC = (fabs(cx) + fabs(cy)) + fabs(cz);
+  return fabs(det) <= 0x1.0p-18f * ((nB * nC + nC * nA) + nA * nB);
+}
+
 /* The float edge functions U, V, W of a triangle with long edges (flags
  * CR_TRI_LONG_*: longer than 16 times their distance from the world origin,
  * where float's error, relative to |v - o|, can exceed check.h's tolerance,
@@ -628,8 +656,23 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
 #endif
   if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
     return 0;
-  const real det = U + V + W;
+  real det = U + V + W;
   if (det == (real)0.0f) return 0;
+#ifndef CR_FP64
+  /* A float hit whose projection is degenerate within rounding (a small
+   * triangle seen edge-on from far away: its edge functions are all below
+   * their error, two can round to 0 and the third not, an "inside" far from
+   * the triangle): the three edges again in double-float. */
+  if (Triangle_ProjectionUndecided(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz), CR_PICK3(B, kx),
+                                   CR_PICK3(B, ky), CR_PICK3(B, kz), CR_PICK3(C, kx), CR_PICK3(C, ky),
+                                   CR_PICK3(C, kz), det)) {
+    Triangle_EdgesDf(r, tri, &U, &V, &W);
+    if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
+      return 0;
+    det = U + V + W;
+    if (det == (real)0.0f) return 0;
+  }
+#endif
   /* The distance along the ray comes from the triangle's plane, not from
    * T / det: on a sliver det (twice the projected area) is small beside the
    * rounding of U, V, W, and T / det errs in proportion to the aspect ratio

@@ -113,7 +113,7 @@ CR_FUNC Triangle Packet_LoadTriangle(CR_GLOBAL const Triangle* p)
     t.v1[a] = p->v1[a];
     t.v2[a] = p->v2[a];
   }
-  t.flags = 0u; /* not read by the test */
+  t.flags = p->flags; /* CR_TRI_LONG_*: robust mode checks those edges */
   t.pad1 = 0u;
   t.pad2 = 0u;
   return t;

@@ -453,6 +453,32 @@ __attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const 
   W = vfloat<N>::Load(w);
 }
 
+// Triangle_EdgesDf of kernels/intersect.h for the lanes of `bits`.
+template <int N, class PlaneFn>
+__attribute__((noinline, cold)) void Triangle_EdgesDfN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
+                                                       const vfloat<N> dir[3], vfloat<N>& U, vfloat<N>& V,
+                                                       vfloat<N>& W)
+{
+  alignas(32) float u[N], v[N], w[N];
+  U.Store(u);
+  V.Store(v);
+  W.Store(w);
+  for (; bits; bits &= bits - 1) {
+    const int l = LowestBit(bits);
+    RayRecord rec{};
+    Lane3<N>(org, l, rec.org);
+    Lane3<N>(dir, l, rec.dir);
+    rec.tmax = __builtin_inff();
+    Ray ray;
+    Ray_Init(&ray, &rec);
+    const Triangle tri = plane.Tri(l);
+    Triangle_EdgesDf(&ray, &tri, &u[l], &v[l], &w[l]);
+  }
+  U = vfloat<N>::Load(u);
+  V = vfloat<N>::Load(v);
+  W = vfloat<N>::Load(w);
+}
+
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
@@ -477,12 +503,32 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   if (const unsigned longLanes = plane.LongEdgeLanes()) Triangle_RefineEdgesN<N>(longLanes, plane, org, dir, U, V, W);
   const vfloat<N> zero(0.0f);
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
-  const vfloat<N> det = U + V + W;
+  vfloat<N> det = U + V + W;
   miss = miss | (det == zero);
   // Most tests miss here: skip the division when all do.
   if (All(miss)) {
     tHit = uHit = vHit = zero;
     return vbool<N>(false);
+  }
+  // Float hits whose projection is degenerate within rounding
+  // (Triangle_ProjectionUndecided): the scalar kernels' Triangle_EdgesDf,
+  // lane by lane.
+  {
+    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
+    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
+    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
+    const vbool<N> undecided =
+        AndNot(Abs(det) <= vfloat<N>(0x1.0p-18f) * ((nB * nC + nC * nA) + nA * nB), miss);
+    if (Any(undecided)) {
+      Triangle_EdgesDfN<N>(undecided.Bits(), plane, org, dir, U, V, W);
+      miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+      det = U + V + W;
+      miss = miss | (det == zero);
+      if (All(miss)) {
+        tHit = uHit = vHit = zero;
+        return vbool<N>(false);
+      }
+    }
   }
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
   // axis order, which the sums' rounding depends on); where n . p cancels

@@ -18,6 +18,7 @@
 // angle, away from triangle edges and cone rims) must report that
 // primitive with t within 2^-20 relative of the reference's; all others the
 // reference's answer under check.h.
+#include <array>
 #include <cmath>
 
 #include "bench/hard_gen.h"
@@ -262,6 +263,49 @@ HardCase Mixed(const GenOptions& o)
   return c;
 }
 
+// Small primitives seen from far away, the origins in or near their planes
+// (a random ray from a corner of a scene that holds a ground sphere): the
+// triangle is seen edge-on, every edge function lies below its rounding and
+// two can round to 0 while the third does not, an "inside" 10^6 away from
+// the triangle unless the degenerate projection is caught.
+HardCase FarOrigins(const GenOptions& o)
+{
+  Rng rng(505);
+  SceneBuilder b;
+  std::vector<std::array<glm::dvec3, 3>> tris;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec3 c = rng.InBox({-10, -10, -10}, {10, 10, 10});
+    const std::array<glm::dvec3, 3> t = {c + rng.UnitVector() * rng.Uniform(0.5, 3.0),
+                                         c + rng.UnitVector() * rng.Uniform(0.5, 3.0),
+                                         c + rng.UnitVector() * rng.Uniform(0.5, 3.0)};
+    b.Triangle(t[0], t[1], t[2]);
+    tris.push_back(t);
+  }
+  for (int i = 0; i < 4; ++i) b.Sphere(rng.InBox({-10, -10, -10}, {10, 10, 10}), rng.Uniform(0.5, 2.0));
+  b.Cone({-3, -8, 2}, 1.0, {4, -6, 1}, 0.5);
+  HardCase c;
+  c.name = "huge/far-origins";
+  c.scene = b.Finish();
+  c.expect = Expect::Reference;
+  const std::size_t n = o.quick ? 3000 : 30000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto& t = tris[k % tris.size()];
+    const glm::dvec3 nrm = glm::normalize(glm::cross(t[1] - t[0], t[2] - t[0]));
+    const glm::dvec3 centre = (t[0] + t[1] + t[2]) / 3.0;
+    // An origin 1e5..2e6 away, in the triangle's plane up to 0..1e-3 of the
+    // distance.
+    const double dist = std::exp(rng.Uniform(std::log(1e5), std::log(2e6)));
+    glm::dvec3 along = rng.UnitVector();
+    along = glm::normalize(along - glm::dot(along, nrm) * nrm);
+    const glm::dvec3 org = centre + dist * along + nrm * (dist * 1e-3 * rng.Uniform(-1.0, 1.0) * (k % 3 == 0));
+    glm::dvec3 dir;
+    if (k % 2 == 0) dir = rng.UnitVector() * rng.Uniform(0.5, 2.0);                      // anywhere
+    else dir = (centre + rng.UnitVector() * rng.Uniform(0.0, 3.0)) - org;                // at the triangle
+    c.rays.push_back(Rec(org, dir));
+  }
+  return c;
+}
+
 }  // namespace
 
 void AddHugeCases(std::vector<CaseSpec>& specs)
@@ -300,6 +344,12 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
                                "long of radius 1 to 2 seen from 20..100 away.") +
                        expect,
                    false, [](AccelKind, const GenOptions& o) { return HugeCones(o); }});
+  specs.push_back({"huge/far-origins", "huge",
+                   "8 triangles 0.5..3 across, 4 spheres and a cone near the origin; ray origins 1e5..2e6 away in "
+                   "the triangles' planes (a third of them off the plane by up to 1e-3 of the distance), directions "
+                   "at random and at the triangles: each triangle seen edge-on from far away, where every edge "
+                   "function lies below its rounding. Expect: the reference's answer under check.h's tolerance.",
+                   false, [](AccelKind, const GenOptions& o) { return FarOrigins(o); }});
   specs.push_back({"huge/mixed-scales", "huge",
                    std::string("Spheres of radius 1e-4, triangles 2e-4 across and cylinders of radius 1e-4 standing on a "
                                "ground sphere of radius 1e6, next to a tilted triangle 1e6 across; cameras 0.01..1 "
