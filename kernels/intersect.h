@@ -89,8 +89,8 @@ CR_FUNC float Ef_DiffOfProducts(float a, float b, float c, float d)
  * rounded to the spacing of the larger coordinate (origin detail finer than
  * that is lost: a camera jittered by 1e-4 looking at a sphere 1e4 away).
  * Where |disc| is within a bound E of those errors its sign, hit or miss, is
- * not decided, and Sphere_DiscExact recomputes the cross product from the
- * exact o - c (fh + fl, TwoSum) and exact products: error about u |f x d|.
+ * not decided, and Sphere_IntersectDf recomputes the whole test in
+ * double-float from the exact o - c (fh + fl, TwoSum).
  * E ~ 3 sqrt(3) u |f| |d| (|f x d| + 3 u |f| |d|) + u a r^2, compared
  * squared so that no square root is needed, with a factor of 8 to spare:
  * E^2 <= 2^-29 P (cc + 2^-38 P), P = |f|^2 |d|^2 (the a r^2 term is absorbed:
@@ -107,12 +107,6 @@ CR_FUNC real Sphere_DiscOfExactF(const real fh[3], const real fl[3], const real 
   const real cz = Ef_DiffOfProducts(fh[0], d[1], fh[1], d[0]) + (fl[0] * d[1] - fl[1] * d[0]);
   return ar2 - (cx * cx + cy * cy + cz * cz);
 }
-CR_COLD CR_FUNC real Sphere_DiscExact(const Ray* r, const Sphere* s, const real fh[3], real ar2)
-{
-  real fl[3];
-  CR_UNROLL for (int i = 0; i < 3; ++i) Ef_TwoSum(r->org[i], -s->center[i], &fl[i]);
-  return Sphere_DiscOfExactF(fh, fl, r->dir, ar2);
-}
 
 /* |a| >= |b| (or a == 0): a + b = s + e exactly. */
 CR_FUNC float Ef_FastTwoSum(float a, float b, float* e)
@@ -128,7 +122,7 @@ CR_FUNC float Ef_FastTwoSum(float a, float b, float* e)
  * surfaces closer along the ray than one ulp of t. f = o - c is exact
  * (fh + fl), bh = f.d and a = d.d are summed from exact products, and the
  * roots (-bh -+ sq) / a are divided in double-float. sq, the square root of
- * Sphere_DiscExact, stays float: its error is u sq, and at a tie between two
+ * Sphere_DiscOfExactF, stays float: its error is u sq, and at a tie between two
  * surfaces of small far spheres sq is far below |bh|. */
 CR_FUNC void Sphere_TieT(const real org[3], const real dir[3], real tmin, const Sphere* s, real* hi, real* lo)
 {
@@ -407,18 +401,17 @@ CR_COLD CR_FUNC void Triangle_EdgesDf(const Ray* r, const Triangle* tri, real* U
   *V = Triangle_EdgeDf(r, v0, v2);
   *W = Triangle_EdgeDf(r, v1, v0);
 }
-/* Whether a float hit's det = U + V + W (twice the sheared projected area)
- * lies within the rounding of U, V, W: 2^-18 times the products of the
- * translated vertices' L1 norms (Triangle_RefineEdges' bound), summed over
- * the edges. Arguments: the translated vertices in the ray's axis order
- * (kx, ky, kz). */
-CR_FUNC int Triangle_ProjectionUndecided(real ax, real ay, real az, real bx, real by, real bz, real cx, real cy,
-                                         real cz, real det)
+/* Whether all three float edge functions lie within their rounding error,
+ * 2^-19 times the product of their vertices' translated L1 norms (the bound
+ * of Triangle_RefineEdges with a margin of 2 instead of 4). Arguments: the
+ * translated vertices in the ray's axis order (kx, ky, kz). */
+CR_FUNC int Triangle_EdgesUndecided(real ax, real ay, real az, real bx, real by, real bz, real cx, real cy, real cz,
+                                    real U, real V, real W)
 {
   const real nA = (fabs(ax) + fabs(ay)) + fabs(az);
   const real nB = (fabs(bx) + fabs(by)) + fabs(bz);
   const real nC = (fabs(cx) + fabs(cy)) + fabs(cz);
-  return fabs(det) <= 0x1.0p-18f * ((nB * nC + nC * nA) + nA * nB);
+  return fabs(U) <= 0x1.0p-19f * (nB * nC) && fabs(V) <= 0x1.0p-19f * (nC * nA) && fabs(W) <= 0x1.0p-19f * (nA * nB);
 }
 
 /* The float edge functions U, V, W of a triangle with long edges (flags
@@ -659,13 +652,16 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   real det = U + V + W;
   if (det == (real)0.0f) return 0;
 #ifndef CR_FP64
-  /* A float hit whose projection is degenerate within rounding (a small
-   * triangle seen edge-on from far away: its edge functions are all below
-   * their error, two can round to 0 and the third not, an "inside" far from
-   * the triangle): the three edges again in double-float. */
-  if (Triangle_ProjectionUndecided(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz), CR_PICK3(B, kx),
-                                   CR_PICK3(B, ky), CR_PICK3(B, kz), CR_PICK3(C, kx), CR_PICK3(C, ky),
-                                   CR_PICK3(C, kz), det)) {
+  /* A float hit whose three edge functions all lie within their rounding
+   * (a small triangle seen edge-on from far away, its projection degenerate:
+   * two can round to 0 and the third not, an "inside" far from the
+   * triangle): the three edges again in double-float. Only then: a rule
+   * that fired on one edge of a hit would decide that edge differently from
+   * the neighbour that shares it (which missed, in float, on that edge) and
+   * could let a ray through; with all three edges below their rounding the
+   * hit is marginal anyway, and no ray from inside a mesh sees one. */
+  if (Triangle_EdgesUndecided(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz), CR_PICK3(B, kx), CR_PICK3(B, ky),
+                              CR_PICK3(B, kz), CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz), U, V, W)) {
     Triangle_EdgesDf(r, tri, &U, &V, &W);
     if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
       return 0;

@@ -176,53 +176,11 @@ CR_SIMD_INLINE void Lane3(const vfloat<N> v[3], int l, float out[3])
   for (int i = 0; i < 3; ++i) out[i] = v[i][l];
 }
 
-// Error-free transformations, lane by lane those of kernels/intersect.h:
-// a + b = s + e and a b = p + e exactly. The product's error comes from one
-// FMA where the ISA has it; it is exact either way, so the bits agree with
-// Dekker's split in the kernels.
-template <int N>
-CR_SIMD_INLINE vfloat<N> Ef_TwoSumN(vfloat<N> a, vfloat<N> b, vfloat<N>& e)
-{
-  const vfloat<N> s = a + b;
-  const vfloat<N> bb = s - a;
-  e = (a - (s - bb)) + (b - bb);
-  return s;
-}
-template <int N>
-CR_SIMD_INLINE vfloat<N> Ef_TwoProductN(vfloat<N> a, vfloat<N> b, vfloat<N>& e)
-{
-  const vfloat<N> p = a * b;
-  e = ProductError(a, b, p);
-  return p;
-}
-template <int N>
-CR_SIMD_INLINE vfloat<N> Ef_DiffOfProductsN(vfloat<N> a, vfloat<N> b, vfloat<N> c, vfloat<N> d)
-{
-  vfloat<N> e1, e2, es;
-  const vfloat<N> p1 = Ef_TwoProductN<N>(a, b, e1);
-  const vfloat<N> p2 = Ef_TwoProductN<N>(c, d, e2);
-  const vfloat<N> s = Ef_TwoSumN<N>(p1, -p2, es);
-  return s + (es + (e1 - e2));
-}
-
-// Sphere_DiscExact: a r^2 - |f x d|^2 from the exact o - c and exact
-// products. Rare, so out of line: the traversal loops keep their registers.
-template <int N>
-__attribute__((noinline, cold)) vfloat<N> Sphere_DiscExactN(const vfloat<N> org[3], const vfloat<N> cen[3],
-                                                           const vfloat<N> dir[3], vfloat<N> ar2)
-{
-  vfloat<N> f[3], fl[3];
-  for (int i = 0; i < 3; ++i) f[i] = Ef_TwoSumN<N>(org[i], -cen[i], fl[i]);
-  const vfloat<N> ex = Ef_DiffOfProductsN<N>(f[1], dir[2], f[2], dir[1]) + (fl[1] * dir[2] - fl[2] * dir[1]);
-  const vfloat<N> ey = Ef_DiffOfProductsN<N>(f[2], dir[0], f[0], dir[2]) + (fl[2] * dir[0] - fl[0] * dir[2]);
-  const vfloat<N> ez = Ef_DiffOfProductsN<N>(f[0], dir[1], f[1], dir[0]) + (fl[0] * dir[1] - fl[1] * dir[0]);
-  return ar2 - (ex * ex + ey * ey + ez * ez);
-}
-
 // Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen; a = d.d
 // (Dot3N(dir, dir), computed once per ray by the caller). Where the float
-// discriminant is within its error bound (Sphere_DiscUndecided), it is
-// recomputed from the exact o - c and exact products (Sphere_DiscExact).
+// discriminant is within its error bound (Sphere_DiscUndecided) or the roots
+// may be off (Quadratic_NeedsDf), the lane takes the scalar kernels'
+// double-float test (Sphere_IntersectDf).
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
                                           vfloat<N> a, vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
@@ -510,15 +468,16 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     tHit = uHit = vHit = zero;
     return vbool<N>(false);
   }
-  // Float hits whose projection is degenerate within rounding
-  // (Triangle_ProjectionUndecided): the scalar kernels' Triangle_EdgesDf,
-  // lane by lane.
+  // Float hits whose three edge functions all lie within their rounding
+  // (Triangle_EdgesUndecided): the scalar kernels' Triangle_EdgesDf, lane by
+  // lane.
   {
     const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
     const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
     const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
-    const vbool<N> undecided =
-        AndNot(Abs(det) <= vfloat<N>(0x1.0p-18f) * ((nB * nC + nC * nA) + nA * nB), miss);
+    const vfloat<N> k(0x1.0p-19f);
+    const vbool<N> undecided = AndNot(
+        (Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB)), miss);
     if (Any(undecided)) {
       Triangle_EdgesDfN<N>(undecided.Bits(), plane, org, dir, U, V, W);
       miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));

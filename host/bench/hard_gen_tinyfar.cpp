@@ -18,7 +18,7 @@
 // jittered by less than ulp(|c|) / 2 (o - c in float loses the jitter), and
 // two spheres whose surfaces are closer along the ray than one ulp of t
 // (float t cannot order them). Robust mode resolves both with error-free
-// transformations (kernels/intersect.h: Sphere_DiscExact where the float
+// transformations (kernels/intersect.h: Sphere_IntersectDf where the float
 // discriminant is undecided, Sphere_TieOrder at an exact tie of t), so they
 // are held to 0 like every other case.
 #include <cmath>

@@ -124,7 +124,7 @@ std::string SpeedErrorTable(const json& rows)
     std::string precision;
     double logSum = 0.0;
     int n = 0;
-    std::uint64_t wrong = 0, rays = 0;
+    std::uint64_t wrong = 0, flips = 0, rays = 0;
     double maxRel = 0.0, meanRelWeighted = 0.0, weight = 0.0;
   };
   std::map<std::string, Acc> acc;
@@ -142,6 +142,7 @@ std::string SpeedErrorTable(const json& rows)
     }
     const json& e = r["error"];
     a.wrong += static_cast<std::uint64_t>(Num(e, "wrong"));
+    a.flips += static_cast<std::uint64_t>(Num(e, "flips"));
     a.rays += static_cast<std::uint64_t>(Num(r, "rays"));
     a.maxRel = std::max(a.maxRel, Num(e, "max_rel_t_err"));
     const double agree = Num(e, "agree");
@@ -151,14 +152,17 @@ std::string SpeedErrorTable(const json& rows)
   if (order.empty()) return "";
   std::string s =
       "## Speed against error, per configuration\n\nGeometric mean of the median Mrays/s over every scene and ray "
-      "kind; wrong answers summed over the same rows (reference/check.h); relative t error of the agreeing closest "
-      "hits (max, and mean weighted by agreeing rays).\n\n"
-      "| configuration | precision | Mrays/s (geo. mean) | wrong | wrong rate | max rel. t error | mean rel. t error |\n"
-      "| --- | --- | ---: | ---: | ---: | ---: | ---: |\n";
+      "kind; wrong answers and hit/miss flips explained by marginal geometry summed over the same rows "
+      "(reference/check.h, docs/TOLERANCE.md); relative t error of the agreeing closest hits (max, and mean weighted "
+      "by agreeing rays).\n\n"
+      "| configuration | precision | Mrays/s (geo. mean) | wrong | wrong rate | flips | max rel. t error | mean rel. t "
+      "error |\n"
+      "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto& l : order) {
     const Acc& a = acc[l];
-    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", l, a.precision, a.n ? F(std::exp(a.logSum / a.n)) : "–",
-                     a.wrong, Sci(a.rays ? double(a.wrong) / double(a.rays) : 0.0), Sci(a.maxRel),
+    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |\n", l, a.precision,
+                     a.n ? F(std::exp(a.logSum / a.n)) : "–", a.wrong,
+                     Sci(a.rays ? double(a.wrong) / double(a.rays) : 0.0), a.flips, Sci(a.maxRel),
                      Sci(a.weight > 0.0 ? a.meanRelWeighted / a.weight : 0.0));
   }
   return s + "\n";
