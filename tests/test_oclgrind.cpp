@@ -24,6 +24,8 @@
 // per precision (about 9 s cold on the CI machine) where 252 specialised
 // PoCL programs would take minutes. Skipped, loudly, without oclgrind or
 // without an OpenCL device. Cost: docs/OPENCL.md, "Checked under Oclgrind".
+// A last test registers Oclgrind's ICD beside the installed ones and checks
+// that the default device and `--backend auto` do not change.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -419,4 +421,53 @@ TEST_CASE("oclgrind: a program it cannot run fails by name and is not cached" * 
       for (const auto& e : fs::directory_iterator(cacheDir)) nEntries += e.path().extension() == ".clbin";
     CHECK(nEntries == 0);
   }
+}
+
+TEST_CASE("oclgrind: a registered Oclgrind ICD changes no default choice" * doctest::skip(NoOclgrind()))
+{
+  // The Debian package registers no ICD; someone may. A vendors directory
+  // with every installed ICD plus Oclgrind's, named to come first.
+  const fs::path icd = fs::path(OclgrindPath()).parent_path().parent_path() / "lib" / "oclgrind" /
+                       "liboclgrind-rt-icd.so";
+  const fs::path vendors = "/etc/OpenCL/vendors";
+  if (!fs::exists(icd) || !fs::exists(vendors)) {
+    MESSAGE("no ", icd.string(), " or ", vendors.string(), ": nothing to register");
+    return;
+  }
+  const fs::path dir = Dir() / "vendors";
+  fs::create_directories(dir);
+  for (const auto& e : fs::directory_iterator(vendors))
+    if (e.path().extension() == ".icd") fs::copy_file(e.path(), dir / e.path().filename());
+  std::ofstream(dir / "0-oclgrind.icd") << icd.string() << "\n";
+  const Fixture& f = GetFixture(kTypeSets[6]);
+  auto run = [&](const std::string& args) {
+    const fs::path out = Dir() / "icd.out", err = Dir() / "icd.err";
+    const std::string cmd = fmt::format("env -u CELLRAY_DEVICE OCL_ICD_VENDORS={} CELLRAY_CACHE_DIR={} {} {} > {} 2> {}",
+                                        dir.string(), (BuildDir() / "test-cache" / "opencl").string(), CELLRAY_BINARY,
+                                        args, out.string(), err.string());
+    const int status = std::system(cmd.c_str());
+    INFO(args, "\nstderr: ", Slurp(err));
+    REQUIRE(WIFEXITED(status));
+    REQUIRE(WEXITSTATUS(status) == 0);
+    return nlohmann::json::parse(Slurp(out));
+  };
+  const nlohmann::json info = run("info");
+  std::vector<std::pair<std::string, bool>> devices;  // name, simulator
+  bool realGpu = false;
+  for (const auto& p : info["opencl_platforms"])
+    for (const auto& d : p["devices"]) {
+      devices.emplace_back(d["name"].get<std::string>(), d["simulator"].get<bool>());
+      realGpu = realGpu || (d["type"] == "gpu" && !d["simulator"].get<bool>());
+    }
+  REQUIRE(devices.size() >= 2);
+  CHECK(devices.back().first == "Oclgrind Simulator");  // listed last...
+  CHECK(devices.back().second);
+  CHECK_FALSE(devices.front().second);  // ...after the real devices, whose numbers stay
+  const std::string trace = fmt::format("trace {} --rays {}", f.scene, f.rays);
+  // `auto` does not take the simulator for a GPU, nor the default choice for
+  // a device.
+  CHECK(run(trace)["backend"] == (realGpu ? "opencl" : "simd"));
+  CHECK(run(trace + " --backend opencl")["device"] != "Oclgrind Simulator");
+  CHECK(run(fmt::format("{} --backend opencl --device {}", trace, devices.size() - 1))["device"] ==
+        "Oclgrind Simulator");
 }
