@@ -285,7 +285,8 @@ void Sweep(Precision precision, const char* variant)
         CHECK(n == 0);
       }
   }
-  MESSAGE(runs, " configurations (", std::string(PrecisionName(precision)), ", ", std::string(variant), ") under oclgrind");
+  MESSAGE(runs, " configurations (", std::string(PrecisionName(precision)), ", ", std::string(variant),
+          ") under oclgrind");
 }
 
 }  // namespace
@@ -442,9 +443,9 @@ TEST_CASE("oclgrind: a registered Oclgrind ICD changes no default choice" * doct
   const Fixture& f = GetFixture(kTypeSets[6]);
   auto run = [&](const std::string& args) {
     const fs::path out = Dir() / "icd.out", err = Dir() / "icd.err";
-    const std::string cmd = fmt::format("env -u CELLRAY_DEVICE OCL_ICD_VENDORS={} CELLRAY_CACHE_DIR={} {} {} > {} 2> {}",
-                                        dir.string(), (BuildDir() / "test-cache" / "opencl").string(), CELLRAY_BINARY,
-                                        args, out.string(), err.string());
+    const std::string cmd =
+        fmt::format("env -u CELLRAY_DEVICE OCL_ICD_VENDORS={} CELLRAY_CACHE_DIR={} {} {} > {} 2> {}", dir.string(),
+                    (BuildDir() / "test-cache" / "opencl").string(), CELLRAY_BINARY, args, out.string(), err.string());
     const int status = std::system(cmd.c_str());
     INFO(args, "\nstderr: ", Slurp(err));
     REQUIRE(WIFEXITED(status));

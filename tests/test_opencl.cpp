@@ -695,8 +695,8 @@ TEST_CASE("opencl: a cached program whose kernels cannot be created is removed a
   const long warnings = WarningCount();
   std::string note;
   CHECK(run("packet", &note) == "miss");
-  CHECK(note.find("the driver rejected the cached binary (CL_INVALID_KERNEL_NAME at clCreateKernel(Trace_RaysPacket))") !=
-        std::string::npos);
+  CHECK(note.find("the driver rejected the cached binary (CL_INVALID_KERNEL_NAME at "
+                  "clCreateKernel(Trace_RaysPacket))") != std::string::npos);
   CHECK(WarningCount() == warnings + 1);
   // Replaced by the rebuilt program, which is trusted from then on.
   CHECK(run("packet", nullptr) == "hit");

@@ -85,7 +85,8 @@ const ClDevice& NamedDevice(const std::vector<ClDevice>& all, const std::string&
     if (a >= static_cast<int>(all.size())) throw notFound();
     return all[static_cast<std::size_t>(a)];
   }
-  if (!ParseIndex(std::string_view(spec).substr(0, colon), a) || !ParseIndex(std::string_view(spec).substr(colon + 1), b))
+  const std::string_view sv(spec);
+  if (!ParseIndex(sv.substr(0, colon), a) || !ParseIndex(sv.substr(colon + 1), b))
     throw InputError(fmt::format("{} '{}': expected N or platform:device (devices: {})", from, spec, Listing(all)));
   for (const auto& d : all)
     if (d.platformIndex == a && d.deviceIndex == b) return d;

@@ -245,7 +245,8 @@ std::unique_ptr<Tracer> CreateBackend(const Scene& scene, const TraceConfig& con
 
 std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
 {
-  if (config.backend == Backend::OpenCL && config.fallbackToSimd) return std::make_unique<FallbackTracer>(scene, config);
+  if (config.backend == Backend::OpenCL && config.fallbackToSimd)
+    return std::make_unique<FallbackTracer>(scene, config);
   std::unique_ptr<Tracer> t = CreateBackend(scene, config);
   t->backend_ = config.backend;
   return t;
