@@ -149,6 +149,7 @@ TEST_CASE("determinism: every backend answers bit-identically across runs and wi
 
 TEST_CASE("determinism: the binary writes identical rays, hits and images with --threads 1 and 2")
 {
+  auto cache = test::OpenCLTestCacheDir();  // inherited by the binary
   const fs::path dir = fs::path(test::BuildDir()) / "test-cache" / fmt::format("determinism-{}", ::getpid());
   fs::remove_all(dir);
   fs::create_directories(dir);
