@@ -17,9 +17,16 @@
  *   CR_CAMERA_FP64                    primary rays generated in double, as
  *                                     host/scene/camera.cpp does (bit-equal)
  *   CR_MATERIALS, CR_LIGHTS           reserved for the renderer's kernels
+ *   CR_INJECT_BUILD_FAULT             an #error (the injected build failure
+ *                                     of host/cl/cl_fault.h)
  * Every kernel takes the same scene and structure arguments (CR_SCENE_PARAMS)
  * so that the host binds them once per program. */
 #include "prelude.h"
+
+#ifdef CR_INJECT_BUILD_FAULT
+/* host/cl/cl_fault.h: CELLRAY_CL_FAULT=build makes the compiler fail here. */
+#error "build failure injected by CELLRAY_CL_FAULT=build"
+#endif
 
 #ifdef CR_FP64
 typedef double real;

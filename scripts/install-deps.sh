@@ -9,7 +9,7 @@ pkgs=(
   ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers pocl-opencl-icd clinfo
   libglm-dev libopenimageio-dev openimageio-tools libtbb-dev libcli11-dev
   nlohmann-json3-dev libfmt-dev doctest-dev libbenchmark-dev libtinyobjloader-dev
-  libembree-dev python3-matplotlib
+  libembree-dev python3-matplotlib oclgrind
 )
 
 missing=()

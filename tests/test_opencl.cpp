@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -23,8 +24,11 @@
 #include "cl/cl_context.h"
 #include "cl/cl_device.h"
 #include "cl/cl_error.h"
+#include "cl/cl_options.h"
+#include "cl/cl_program.h"
 #include "cl/cl_program_cache.h"
 #include "core/error.h"
+#include "render/image_io.h"
 #include "scene/camera.h"
 #include "test_util.h"
 
@@ -54,31 +58,9 @@ namespace fs = std::filesystem;
 // The build tree (the cellray binary is in <build>/bin).
 fs::path BuildDir() { return fs::path(CELLRAY_BINARY).parent_path().parent_path(); }
 
-// Sets an environment variable for the scope of a test.
-class ScopedEnv {
- public:
-  ScopedEnv(const char* name, const std::string& value) : name_(name)
-  {
-    if (const char* old = std::getenv(name)) old_ = old;
-    had_ = std::getenv(name) != nullptr;
-    ::setenv(name, value.c_str(), 1);
-  }
-  ~ScopedEnv()
-  {
-    if (had_)
-      ::setenv(name_, old_.c_str(), 1);
-    else
-      ::unsetenv(name_);
-  }
+using test::ScopedEnv;
 
- private:
-  const char* name_;
-  std::string old_;
-  bool had_ = false;
-};
-
-// Programs built by the tests persist under the build tree.
-ScopedEnv TestCacheDir() { return ScopedEnv("CELLRAY_CACHE_DIR", (BuildDir() / "test-cache" / "opencl").string()); }
+ScopedEnv TestCacheDir() { return test::OpenCLTestCacheDir(); }
 
 std::int64_t UlpDistance(float a, float b)
 {
@@ -314,12 +296,16 @@ TEST_CASE("opencl: device choice" * doctest::skip(NoOpenCL()))
   REQUIRE(!all.empty());
   CHECK(SelectClDevice("0").name == all[0].name);
   CHECK(SelectClDevice(fmt::format("{}:{}", all[0].platformIndex, all[0].deviceIndex)).flatIndex == 0);
-  CHECK_THROWS_AS(SelectClDevice(std::to_string(all.size())), InputError);
-  CHECK_THROWS_AS(SelectClDevice("0:999"), InputError);
+  // A well-formed name of a device this machine lacks is a runtime error
+  // (CL_DEVICE_NOT_FOUND: `auto` falls back from it); a malformed one is
+  // bad input.
+  CHECK_THROWS_AS(SelectClDevice(std::to_string(all.size())), RuntimeError);
+  CHECK_THROWS_AS(SelectClDevice("0:999"), RuntimeError);
   CHECK_THROWS_AS(SelectClDevice("gpu"), InputError);
+  CHECK_THROWS_AS(SelectClDevice("1:x"), InputError);
   {
     ScopedEnv env("CELLRAY_DEVICE", "7:7");
-    CHECK_THROWS_AS(SelectClDevice(""), InputError);
+    CHECK_THROWS_AS(SelectClDevice(""), RuntimeError);
   }
   // A buffer larger than one allocation may be is refused before allocating.
   CHECK_THROWS_AS(ClCheckAllocation(all[0], "test buffer", all[0].maxAllocBytes + 1), RuntimeError);
@@ -495,6 +481,225 @@ TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * do
   CHECK(run(&note) == "miss");
   CHECK(note == "truncated header");
   CHECK(run(nullptr) == "hit");
+  SetWarningsQuiet(false);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+struct CliRun {
+  int code = -1;
+  std::string out, err;
+};
+
+// Runs `env <envs> cellray <args>`, capturing stdout and stderr.
+CliRun RunCellray(const std::string& envs, const std::string& args, const fs::path& scratch)
+{
+  const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+  const std::string cmd =
+      fmt::format("env {} {} {} > {} 2> {}", envs, CELLRAY_BINARY, args, out.string(), err.string());
+  const int status = std::system(cmd.c_str());
+  CliRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const auto slurp = [](const fs::path& p) {
+    const std::vector<char> v = Slurp(p);
+    return std::string(v.begin(), v.end());
+  };
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+// The lines of `text` that cellray printed ("cellray: ..."); a driver may
+// print its own (PoCL's compiler: "1 error generated.").
+std::vector<std::string> CellrayLines(const std::string& text)
+{
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string line;
+  while (std::getline(ss, line))
+    if (line.rfind("cellray:", 0) == 0) out.push_back(line);
+  return out;
+}
+
+struct FaultCase {
+  const char* fault;
+  const char* error;  // the OpenCL error name the message carries
+};
+constexpr FaultCase kFaults[] = {{"build", "CL_BUILD_PROGRAM_FAILURE"},
+                                 {"kernel", "CL_INVALID_KERNEL_NAME"},
+                                 {"alloc", "CL_MEM_OBJECT_ALLOCATION_FAILURE"},
+                                 {"launch", "CL_OUT_OF_RESOURCES"},
+                                 {"device", "CL_DEVICE_NOT_AVAILABLE"},
+                                 {"limits", "CL_INVALID_WORK_GROUP_SIZE"},
+                                 {"localmem", "CL_OUT_OF_RESOURCES"}};
+
+}  // namespace
+
+TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend opencl and a simd fallback with "
+          "--backend auto" *
+          doctest::skip(NoOpenCL()))
+{
+  const fs::path dir = BuildDir() / "test-cache" / fmt::format("faults-{}", ::getpid());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path cache = dir / "cache";  // this test's own program cache: it must stay empty
+  const std::string scene = test::SpdPath("jacks");
+  const fs::path rays = dir / "jacks.rays", simdHits = dir / "simd.hits";
+  WriteRays(rays.string(), test::MakeRays(test::CachedScene(scene), RayKind::Primary, 12));
+  const std::string trace = fmt::format("trace {} --rays {} --variant packet", scene, rays.string());
+  {
+    const CliRun r = RunCellray("", fmt::format("{} --backend simd -o {}", trace, simdHits.string()), dir);
+    REQUIRE(r.code == 0);
+  }
+  const std::vector<char> expected = Slurp(simdHits);
+  for (const FaultCase& fc : kFaults) {
+    const std::string env = fmt::format("CELLRAY_CL_FAULT={} CELLRAY_CACHE_DIR={}", fc.fault, cache.string());
+    const fs::path hits = dir / fmt::format("{}.hits", fc.fault);
+    {
+      const CliRun r = RunCellray(env, fmt::format("{} --backend opencl -o {}", trace, hits.string()), dir);
+      INFO(fc.fault, " with --backend opencl: exit ", r.code, "\nstderr: ", r.err);
+      CHECK(r.code == kExitRuntime);
+      const auto lines = CellrayLines(r.err);
+      REQUIRE(!lines.empty());
+      CHECK(lines[0].rfind("cellray: OpenCL: ", 0) == 0);
+      CHECK(lines[0].find(fc.error) != std::string::npos);
+      CHECK(lines[0].find(fmt::format("[injected: CELLRAY_CL_FAULT={}]", fc.fault)) != std::string::npos);
+      CHECK(r.out.empty());
+      CHECK_FALSE(fs::exists(hits));  // no output file, not even a partial one
+      if (std::string(fc.fault) == "build") {
+        // The compiler's own log, with the line it stopped at.
+        CHECK(r.err.find("--- build log of ") != std::string::npos);
+        CHECK(r.err.find("build failure injected by CELLRAY_CL_FAULT=build") != std::string::npos);
+      }
+    }
+    {
+      // `auto` uses OpenCL on a CPU device only when one is named.
+      const CliRun r = RunCellray(env, fmt::format("{} --backend auto --device 0 -o {}", trace, hits.string()), dir);
+      INFO(fc.fault, " with --backend auto: exit ", r.code, "\nstderr: ", r.err, "\nstdout: ", r.out);
+      CHECK(r.code == 0);
+      const auto lines = CellrayLines(r.err);
+      REQUIRE(lines.size() == 1);
+      CHECK(lines[0].rfind("cellray: warning: OpenCL: ", 0) == 0);
+      CHECK(lines[0].find(fc.error) != std::string::npos);
+      CHECK(lines[0].find("falling back to the simd backend") != std::string::npos);
+      const auto j = nlohmann::json::parse(r.out);
+      CHECK(j["backend"] == "simd");
+      CHECK(j["fallback_from"] == "opencl");
+      CHECK(j["fallback_reason"].get<std::string>().find(fc.error) != std::string::npos);
+      CHECK(Slurp(hits) == expected);  // the simd backend's answers, bit for bit
+    }
+  }
+  // No program of a failing build (or of one whose kernels could not be
+  // created) is ever stored; the other faults strike after a good build,
+  // whose program may be cached.
+  {
+    fs::remove_all(cache);
+    for (const char* fault : {"build", "kernel"})
+      for (const char* backend : {"opencl", "auto --device 0"})
+        (void)RunCellray(fmt::format("CELLRAY_CL_FAULT={} CELLRAY_CACHE_DIR={}", fault, cache.string()),
+                         fmt::format("{} --backend {}", trace, backend), dir);
+    CHECK(CacheFiles(cache).empty());
+  }
+  // A device this machine does not have: a runtime error by name, and a
+  // fallback for `auto`; a malformed device name stays bad input.
+  {
+    const CliRun r = RunCellray("", fmt::format("{} --backend opencl --device 99", trace), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == kExitRuntime);
+    CHECK(r.err.find("CL_DEVICE_NOT_FOUND") != std::string::npos);
+  }
+  {
+    const fs::path hits = dir / "missing.hits";
+    const CliRun r = RunCellray("", fmt::format("{} --backend auto --device 99 -o {}", trace, hits.string()), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == 0);
+    const auto lines = CellrayLines(r.err);
+    REQUIRE(lines.size() == 1);
+    CHECK(lines[0].find("CL_DEVICE_NOT_FOUND") != std::string::npos);
+    CHECK(lines[0].find("falling back to the simd backend") != std::string::npos);
+    CHECK(Slurp(hits) == expected);
+  }
+  for (const char* backend : {"opencl", "auto"}) {
+    const CliRun r = RunCellray("", fmt::format("{} --backend {} --device 0:x", trace, backend), dir);
+    INFO(backend, " stderr: ", r.err);
+    CHECK(r.code == kExitBadInput);
+  }
+  {
+    const CliRun r = RunCellray("CELLRAY_CL_FAULT=build,bogus", fmt::format("{} --backend opencl", trace), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == kExitBadInput);
+    CHECK(r.err.find("CELLRAY_CL_FAULT 'build,bogus': unknown fault 'bogus'") != std::string::npos);
+  }
+  // A render falls back too (the first Trace fails), to the simd image.
+  {
+    const fs::path a = dir / "fallback.exr", b = dir / "simd.exr";
+    const CliRun r = RunCellray(
+        "CELLRAY_CL_FAULT=alloc",
+        fmt::format("render {} --size 24x16 --no-progress --backend auto --device 0 -o {}", scene, a.string()), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == 0);
+    CHECK(CellrayLines(r.err).size() == 1);
+    CHECK(nlohmann::json::parse(r.out)["backend"] == "simd");
+    REQUIRE(RunCellray("", fmt::format("render {} --size 24x16 --no-progress --backend simd -o {}", scene, b.string()),
+                       dir)
+                .code == 0);
+    int wa = 0, ha = 0, wb = 0, hb = 0;
+    CHECK(ReadImage(a.string(), wa, ha) == ReadImage(b.string(), wb, hb));
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("opencl: a cached program whose kernels cannot be created is removed and rebuilt" *
+          doctest::skip(NoOpenCL()))
+{
+  // What a driver that compiles a program it cannot run leaves behind with
+  // the old cache (which stored at the build): an entry that passes every
+  // check of the file and yet yields no kernel. Made here by storing the
+  // per-ray program's binary under the packet program's key.
+  const fs::path dir = BuildDir() / "test-cache" / fmt::format("nokernel-{}", ::getpid());
+  fs::remove_all(dir);
+  ScopedEnv env("CELLRAY_CACHE_DIR", dir.string());
+  SetWarningsQuiet(true);
+  const Scene& scene = test::CachedScene(test::SpdPath("jacks"));
+  const auto rays = test::MakeRays(scene, RayKind::Primary, 8);
+  std::vector<HitRecord> ref;
+  CreateTracer(scene, TraceConfig{})->Trace(rays, ref, false, nullptr);
+  TraceConfig cfg;
+  cfg.backend = Backend::OpenCL;
+  const ClDevice dev = SelectClDevice("");
+  auto keyOf = [&](const char* variant) {
+    TraceConfig c = cfg;
+    c.variant = variant;
+    return MakeClCacheKey(dir.string(), ClKernelSource(), dev.name, dev.driverVersion, dev.platformVersion,
+                          ClBuildOptions(MakeClProgramSpec(scene, c, false, false, dev), dev));
+  };
+  auto run = [&](const char* variant, std::string* note) {
+    TraceConfig c = cfg;
+    c.variant = variant;
+    auto tracer = CreateTracer(scene, c);
+    std::vector<HitRecord> hits;
+    tracer->Trace(rays, hits, false, nullptr);
+    CHECK(Compare(hits, ref, false).differ == 0);
+    nlohmann::json j;
+    tracer->Describe(j);
+    if (note) *note = j.value("program_cache_note", "");
+    return j["program_cache"].get<std::string>();
+  };
+  CHECK(run("ray", nullptr) == "miss");
+  const ClCacheLookup rayProgram = LoadClCache(keyOf("ray"));
+  REQUIRE(rayProgram.binary);
+  const ClCacheKey packetKey = keyOf("packet");
+  REQUIRE(StoreClCache(packetKey, *rayProgram.binary));
+  REQUIRE(LoadClCache(packetKey).binary);  // a sound entry, as far as the file goes
+  const long warnings = WarningCount();
+  std::string note;
+  CHECK(run("packet", &note) == "miss");
+  CHECK(note.find("the driver rejected the cached binary (CL_INVALID_KERNEL_NAME at "
+                  "clCreateKernel(Trace_RaysPacket))") != std::string::npos);
+  CHECK(WarningCount() == warnings + 1);
+  // Replaced by the rebuilt program, which is trusted from then on.
+  CHECK(run("packet", nullptr) == "hit");
   SetWarningsQuiet(false);
   fs::remove_all(dir);
 }

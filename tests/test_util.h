@@ -2,6 +2,8 @@
 // the conformance check of any tracer against the fp64 reference.
 #pragma once
 
+#include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -18,6 +20,41 @@
 #include "trace/tracer.h"
 
 namespace cr::test {
+
+// Sets an environment variable for the scope of a test.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name)
+  {
+    if (const char* old = std::getenv(name)) old_ = old;
+    had_ = std::getenv(name) != nullptr;
+    ::setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv()
+  {
+    if (had_)
+      ::setenv(name_, old_.c_str(), 1);
+    else
+      ::unsetenv(name_);
+  }
+  ScopedEnv(const ScopedEnv&) = delete;
+  ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+ private:
+  const char* name_;
+  std::string old_;
+  bool had_ = false;
+};
+
+// The build tree (the cellray binary is in <build>/bin).
+inline std::string BuildDir() { return std::filesystem::path(CELLRAY_BINARY).parent_path().parent_path().string(); }
+
+// OpenCL programs built by the tests persist under the build tree
+// (test-cache/opencl), so only the first run pays for the compiler.
+inline ScopedEnv OpenCLTestCacheDir()
+{
+  return ScopedEnv("CELLRAY_CACHE_DIR", BuildDir() + "/test-cache/opencl");
+}
 
 // The 11 SPD scenes shipped in scenes/spd/.
 inline const std::vector<std::string>& SpdScenes()

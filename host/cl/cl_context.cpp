@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "cl/cl_fault.h"
 #include "core/error.h"
 
 namespace cr {
@@ -44,6 +45,9 @@ cl::Buffer ClAlloc(const ClContext& c, const char* what, std::size_t bytes, cl_m
 {
   if (bytes == 0) bytes = 64;
   ClCheckAllocation(c.dev, what, bytes);
+  if (ClFaultInjected(ClFault::Alloc))
+    ThrowClError(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer", __FILE__, __LINE__,
+                 fmt::format("{} ({} bytes){}", what, bytes, ClFaultNote(ClFault::Alloc)));
   cl_int err = CL_SUCCESS;
   cl::Buffer b(c.context, flags, bytes, nullptr, &err);
   CR_CL_CHECK_WHAT(err, "clCreateBuffer", fmt::format("{} ({} bytes)", what, bytes));

@@ -1,10 +1,12 @@
 #include "cl/cl_device.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdlib>
 
 #include <fmt/format.h>
 
+#include "cl/cl_fault.h"
 #include "core/error.h"
 
 namespace cr {
@@ -33,6 +35,11 @@ T DeviceValue(const cl::Device& d, cl_device_info what)
   return v;
 }
 
+// Oclgrind, the OpenCL device simulator (tests/test_oclgrind.cpp): a
+// "GPU" that runs kernels thousands of times slower than any device, to
+// check them. Never a default choice while another device exists.
+bool IsSimulator(const std::string& platformName) { return platformName == "Oclgrind"; }
+
 bool ParseIndex(std::string_view s, int& out)
 {
   auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
@@ -48,6 +55,57 @@ std::string Listing(const std::vector<ClDevice>& all)
   return s;
 }
 
+// The default rule: the first GPU, else the first CPU device, else the first
+// device, simulators only when there is nothing else.
+const ClDevice& DefaultDevice(const std::vector<ClDevice>& all)
+{
+  for (const char* want : {"gpu", "cpu"})
+    for (const auto& d : all)
+      if (d.type == want && !d.simulator) return d;
+  for (const auto& d : all)
+    if (!d.simulator) return d;
+  return all.front();
+}
+
+// The device `spec` names. A malformed spec is bad input (exit 2); a
+// well-formed one that names no device here is a runtime error (exit 1,
+// CL_DEVICE_NOT_FOUND): the same command line may name a device on another
+// machine, and `--backend auto` falls back from it.
+const ClDevice& NamedDevice(const std::vector<ClDevice>& all, const std::string& spec, const std::string& from)
+{
+  const auto colon = spec.find(':');
+  int a = 0, b = 0;
+  const auto notFound = [&] {
+    return RuntimeError(fmt::format("OpenCL: {} '{}': no such device (CL_DEVICE_NOT_FOUND; devices: {})", from, spec,
+                                    Listing(all)));
+  };
+  if (colon == std::string::npos) {
+    if (!ParseIndex(spec, a))
+      throw InputError(fmt::format("{} '{}': expected N or platform:device (devices: {})", from, spec, Listing(all)));
+    if (a >= static_cast<int>(all.size())) throw notFound();
+    return all[static_cast<std::size_t>(a)];
+  }
+  const std::string_view sv(spec);
+  if (!ParseIndex(sv.substr(0, colon), a) || !ParseIndex(sv.substr(colon + 1), b))
+    throw InputError(fmt::format("{} '{}': expected N or platform:device (devices: {})", from, spec, Listing(all)));
+  for (const auto& d : all)
+    if (d.platformIndex == a && d.deviceIndex == b) return d;
+  throw notFound();
+}
+
+// A device that the driver reports unavailable (CL_DEVICE_AVAILABLE false: a
+// lost or reset GPU) cannot take a context.
+ClDevice CheckAvailable(const ClDevice& d)
+{
+  const bool injected = ClFaultInjected(ClFault::Device);
+  if (!d.available || injected)
+    throw RuntimeError(fmt::format("OpenCL: device {} ({}:{} {}) is not available: CL_DEVICE_NOT_AVAILABLE "
+                                   "(CL_DEVICE_AVAILABLE is false){}",
+                                   d.flatIndex, d.platformIndex, d.deviceIndex, d.name,
+                                   injected ? ClFaultNote(ClFault::Device) : ""));
+  return d;
+}
+
 }  // namespace
 
 std::vector<ClDevice> ListClDevices()
@@ -57,6 +115,10 @@ std::vector<ClDevice> ListClDevices()
   if (status == CL_PLATFORM_NOT_FOUND_KHR || (status == CL_SUCCESS && platforms.empty()))
     throw RuntimeError("OpenCL: no platform found (no OpenCL driver is installed or the ICD loader finds none)");
   CR_CL_CHECK(status, "clGetPlatformIDs");
+  // Simulators after every real platform (a stable partition of the ICD
+  // loader's order), so that registering one never renumbers the others.
+  std::stable_partition(platforms.begin(), platforms.end(),
+                        [](const cl::Platform& p) { return !IsSimulator(PlatformString(p, CL_PLATFORM_NAME)); });
   std::vector<ClDevice> out;
   for (std::size_t pi = 0; pi < platforms.size(); ++pi) {
     std::vector<cl::Device> devices;
@@ -72,6 +134,8 @@ std::vector<ClDevice> ListClDevices()
       d.flatIndex = static_cast<int>(out.size());
       d.name = DeviceString(d.device, CL_DEVICE_NAME);
       d.platformName = PlatformString(d.platform, CL_PLATFORM_NAME);
+      d.simulator = IsSimulator(d.platformName);
+      d.available = DeviceValue<cl_bool>(d.device, CL_DEVICE_AVAILABLE) != CL_FALSE;
       d.platformVersion = PlatformString(d.platform, CL_PLATFORM_VERSION);
       d.driverVersion = DeviceString(d.device, CL_DRIVER_VERSION);
       d.version = DeviceString(d.device, CL_DEVICE_VERSION);
@@ -107,26 +171,7 @@ ClDevice SelectClDevice(const std::string& specArg)
   }
   std::vector<ClDevice> all = ListClDevices();
   if (all.empty()) throw RuntimeError("OpenCL: the installed platforms offer no device");
-  if (spec.empty()) {
-    for (const char* want : {"gpu", "cpu"})
-      for (const auto& d : all)
-        if (d.type == want) return d;
-    return all.front();
-  }
-  const auto colon = spec.find(':');
-  int a = 0, b = 0;
-  if (colon == std::string::npos) {
-    if (!ParseIndex(spec, a))
-      throw InputError(fmt::format("{} '{}': expected N or platform:device (devices: {})", from, spec, Listing(all)));
-    if (a >= static_cast<int>(all.size()))
-      throw InputError(fmt::format("{} '{}': no such device (devices: {})", from, spec, Listing(all)));
-    return all[static_cast<std::size_t>(a)];
-  }
-  if (!ParseIndex(std::string_view(spec).substr(0, colon), a) || !ParseIndex(std::string_view(spec).substr(colon + 1), b))
-    throw InputError(fmt::format("{} '{}': expected N or platform:device (devices: {})", from, spec, Listing(all)));
-  for (const auto& d : all)
-    if (d.platformIndex == a && d.deviceIndex == b) return d;
-  throw InputError(fmt::format("{} '{}': no such device (devices: {})", from, spec, Listing(all)));
+  return CheckAvailable(spec.empty() ? DefaultDevice(all) : NamedDevice(all, spec, from));
 }
 
 }  // namespace cr

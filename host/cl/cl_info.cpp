@@ -32,7 +32,9 @@ nlohmann::json OpenCLInventory()
                                      {"max_alloc_bytes", d.maxAllocBytes},
                                      {"local_mem_bytes", d.localMemBytes},
                                      {"max_work_group_size", d.maxWorkGroupSize},
-                                     {"fp64", d.fp64}});
+                                     {"fp64", d.fp64},
+                                     {"available", d.available},
+                                     {"simulator", d.simulator}});
   }
   return out;
 }

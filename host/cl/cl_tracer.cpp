@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cl/cl_context.h"
+#include "cl/cl_fault.h"
 #include "cl/cl_options.h"
 #include "cl/cl_program.h"
 #include "core/error.h"
@@ -117,9 +118,7 @@ class ClTracer final : public Tracer {
     SetArg(k, kArgRaysHits, hitBuf_, p.raysName);
     SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, p.raysName);
     const std::size_t local = std::size_t(p.spec.packetW) * std::size_t(p.spec.packetH);
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(RoundUp(n, local)),
-                                                   cl::NDRange(local)),
-                     "clEnqueueNDRangeKernel", p.raysName);
+    Launch(k, cl::NDRange(RoundUp(n, local)), cl::NDRange(local), p.raysName);
     ReadBack(n, hits, stats);
   }
 
@@ -139,11 +138,8 @@ class ClTracer final : public Tracer {
     SetArg(k, kArgPrimaryHits, hitBuf_, p.primaryName);
     SetArg(k, kArgPrimaryStats, config_.stats ? statsBuf_ : dummy_, p.primaryName);
     const std::size_t lw = std::size_t(p.spec.packetW), lh = std::size_t(p.spec.packetH);
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange,
-                                                   cl::NDRange(RoundUp(std::size_t(width), lw),
-                                                               RoundUp(std::size_t(height), lh)),
-                                                   cl::NDRange(lw, lh)),
-                     "clEnqueueNDRangeKernel", p.primaryName);
+    Launch(k, cl::NDRange(RoundUp(std::size_t(width), lw), RoundUp(std::size_t(height), lh)), cl::NDRange(lw, lh),
+           p.primaryName);
     ReadBack(n, hits, stats);
   }
 
@@ -209,58 +205,83 @@ class ClTracer final : public Tracer {
   {
     auto b = std::make_unique<Built>();
     b->spec = MakeClProgramSpec(scene_, config_, occlusion, camera, cl_.dev);
-    b->program = BuildClProgram(cl_.context, cl_.dev, ClKernelSource(), ClBuildOptions(b->spec, cl_.dev));
     const bool packet = b->spec.variant == ClVariant::Packet;
     b->hasRays = generic_ || !camera;
     b->hasPrimary = generic_ || camera;
     b->raysName = packet ? "Trace_RaysPacket" : "Trace_Rays";
     b->primaryName = packet ? "Trace_PrimaryPacket" : "Trace_Primary";
+    std::vector<std::string> names;
+    if (b->hasRays) names.push_back(b->raysName);
+    if (b->hasPrimary) names.push_back(b->primaryName);
+    b->program = BuildClProgram(cl_.context, cl_.dev, ClKernelSource(), ClBuildOptions(b->spec, cl_.dev), names);
     const std::size_t lw = std::size_t(b->spec.packetW), lh = std::size_t(b->spec.packetH);
     const auto t0 = std::chrono::steady_clock::now();
     // First launches, empty (no ray, 0x0 image): a driver that compiles each
     // kernel for its work-group size (PoCL) does it now, not in a timed Trace.
+    std::size_t next = 0;
     if (b->hasRays) {
-      b->rays = MakeKernel(*b, b->raysName);
+      b->rays = b->program.kernels[next++];
+      CheckKernel(*b, b->rays, b->raysName);
       SetArg(b->rays, kArgAnyHit, cl_int(occlusion), b->raysName);
       SetArg(b->rays, kArgRays, dummy_, b->raysName);
       SetArg(b->rays, kArgNRays, cl_uint(0), b->raysName);
       SetArg(b->rays, kArgRaysHits, dummy_, b->raysName);
       SetArg(b->rays, kArgRaysStats, dummy_, b->raysName);
-      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->rays, cl::NullRange, cl::NDRange(lw * lh),
-                                                     cl::NDRange(lw * lh)),
-                       "clEnqueueNDRangeKernel", b->raysName);
+      Launch(b->rays, cl::NDRange(lw * lh), cl::NDRange(lw * lh), b->raysName);
     }
     if (b->hasPrimary) {
-      b->primary = MakeKernel(*b, b->primaryName);
+      b->primary = b->program.kernels[next++];
+      CheckKernel(*b, b->primary, b->primaryName);
       SetArg(b->primary, kArgAnyHit, cl_int(0), b->primaryName);
       SetPrimaryArgs(b->primary, *b, MakeCameraFrame(scene_.camera, 1, 1), 0, 0);
       SetArg(b->primary, kArgPrimaryHits, dummy_, b->primaryName);
       SetArg(b->primary, kArgPrimaryStats, dummy_, b->primaryName);
-      CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(b->primary, cl::NullRange, cl::NDRange(lw, lh),
-                                                     cl::NDRange(lw, lh)),
-                       "clEnqueueNDRangeKernel", b->primaryName);
+      Launch(b->primary, cl::NDRange(lw, lh), cl::NDRange(lw, lh), b->primaryName);
     }
     CR_CL_CHECK(cl_.queue.finish(), "clFinish");
     b->jitMs = MsSince(t0);
     return b;
   }
 
-  // A kernel of the program with the scene bound, checked against the
-  // device's work-group limit for this kernel.
-  cl::Kernel MakeKernel(const Built& b, const char* name)
+  // Binds the scene to a kernel of the program and checks it against the
+  // device's limits for this kernel before any launch: a work-group of the
+  // packet's size (CL_KERNEL_WORK_GROUP_SIZE; a launch would fail with
+  // CL_INVALID_WORK_GROUP_SIZE) and its local memory (CL_KERNEL_LOCAL_MEM_SIZE
+  // against CL_DEVICE_LOCAL_MEM_SIZE; a launch would fail with
+  // CL_OUT_OF_RESOURCES).
+  void CheckKernel(const Built& b, cl::Kernel& k, const char* name)
   {
-    cl_int err = CL_SUCCESS;
-    cl::Kernel k(b.program.program, name, &err);
-    CR_CL_CHECK_WHAT(err, "clCreateKernel", name);
     BindScene(k, name);
     std::size_t wg = 0;
     CR_CL_CHECK_WHAT(k.getWorkGroupInfo(cl_.dev.device, CL_KERNEL_WORK_GROUP_SIZE, &wg), "clGetKernelWorkGroupInfo",
                      name);
-    if (wg < std::size_t(b.spec.packetW) * std::size_t(b.spec.packetH))
-      throw RuntimeError(fmt::format("OpenCL: kernel {} runs at most {} work-items per group on '{}', fewer than "
-                                     "the {}x{} it needs",
-                                     name, wg, cl_.dev.name, b.spec.packetW, b.spec.packetH));
-    return k;
+    const bool wgFault = ClFaultInjected(ClFault::Limits);
+    if (wgFault) wg = 1;
+    const std::size_t need = std::size_t(b.spec.packetW) * std::size_t(b.spec.packetH);
+    if (wg < need)
+      throw RuntimeError(fmt::format("OpenCL: CL_INVALID_WORK_GROUP_SIZE: kernel {} runs at most {} work-items per "
+                                     "group on {} (CL_KERNEL_WORK_GROUP_SIZE), fewer than the {}x{} it needs{}",
+                                     name, wg, cl_.dev.name, b.spec.packetW, b.spec.packetH,
+                                     wgFault ? ClFaultNote(ClFault::Limits) : ""));
+    cl_ulong local = 0;
+    CR_CL_CHECK_WHAT(k.getWorkGroupInfo(cl_.dev.device, CL_KERNEL_LOCAL_MEM_SIZE, &local), "clGetKernelWorkGroupInfo",
+                     name);
+    const bool localFault = ClFaultInjected(ClFault::LocalMem);
+    const std::uint64_t limit = localFault ? 0 : cl_.dev.localMemBytes;
+    if (local > limit || localFault)
+      throw RuntimeError(fmt::format("OpenCL: CL_OUT_OF_RESOURCES: kernel {} needs {} bytes of local memory; {} "
+                                     "offers {} (CL_DEVICE_LOCAL_MEM_SIZE){}",
+                                     name, local, cl_.dev.name, limit,
+                                     localFault ? ClFaultNote(ClFault::LocalMem) : ""));
+  }
+
+  // Enqueues a kernel (global and local ranges from offset 0).
+  void Launch(cl::Kernel& k, const cl::NDRange& global, const cl::NDRange& local, const char* name)
+  {
+    if (ClFaultInjected(ClFault::Launch))
+      ThrowClError(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel", __FILE__, __LINE__,
+                   name + ClFaultNote(ClFault::Launch));
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, global, local), "clEnqueueNDRangeKernel", name);
   }
 
   void BindScene(cl::Kernel& k, const char* name)

@@ -30,6 +30,7 @@ TraceConfig TracerOptions::ToConfig() const
   TraceConfig c;
   c.accel = ParseAccelKind(accel);
   c.backend = backend == "auto" ? ResolveAutoBackend(device) : ParseBackend(backend);
+  c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
   c.precision = ParsePrecision(precision);
   c.threads = threads;
   c.params.gridDensity = gridDensity;

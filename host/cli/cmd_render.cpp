@@ -66,7 +66,7 @@ Run RegisterRender(CLI::App& app)
     WriteImage(o->out, img.width, img.height, img.rgb);
     nlohmann::json j{{"scene", o->scene},
                      {"output", o->out},
-                     {"backend", BackendName(cfg.backend)},
+                     {"backend", BackendName(tracer->ActiveBackend())},
                      {"accel", cfg.backend == Backend::Reference ? "reference-bvh" : AccelKindName(cfg.accel)},
                      {"device", tracer->DeviceName()},
                      {"width", img.width},
@@ -75,6 +75,10 @@ Run RegisterRender(CLI::App& app)
                      {"spd", ro.spd},
                      {"build_ms", tracer->Info().buildMs},
                      {"stats", stats}};
+    if (!tracer->FallbackReason().empty()) {
+      j["fallback_from"] = "opencl";
+      j["fallback_reason"] = tracer->FallbackReason();
+    }
     if (!o->statsPath.empty()) {
       std::string text = j.dump(2) + "\n";
       WriteFileAtomically(o->statsPath, text.data(), text.size());

@@ -129,7 +129,7 @@ Run RegisterTrace(CLI::App& app)
     j["scene"] = o->scene;
     if (!o->primary.empty()) j["primary"] = o->primary;
     j["accel"] = cfg.backend == Backend::Reference ? "reference-bvh" : AccelKindName(cfg.accel);
-    j["backend"] = BackendName(cfg.backend);
+    j["backend"] = BackendName(tracer->ActiveBackend());
     j["precision"] = PrecisionName(cfg.precision);
     j["variant"] = tracer->VariantName();
     j["device"] = tracer->DeviceName();

@@ -28,6 +28,10 @@ void WriteImage(const std::string& path, int width, int height, const std::vecto
     out = OIIO::ImageBufAlgo::colorconvert(linear, "linear", "sRGB");
     if (out.has_error()) throw RuntimeError(fmt::format("{}: colour conversion failed: {}", path, out.geterror()));
   }
+  // No time stamp: OpenImageIO writes the time of writing into an EXR
+  // (DateTime, OpenEXR's capDate) unless the attribute is set, empty
+  // suppresses it, so that the same render gives the same file.
+  out.specmod().attribute("DateTime", "");
   WriteAtomically(path, [&](const std::string& tmp) {
     if (!out.write(tmp, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8))
       throw RuntimeError(fmt::format("{}: cannot write image: {}", path, out.geterror()));

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -44,7 +45,7 @@ Backend ResolveAutoBackend(const std::string& deviceSpec)
     std::vector<ClDevice> devices = ListClDevices();
     if (named) return Backend::OpenCL;
     for (const ClDevice& d : devices)
-      if (d.type == "gpu") return Backend::OpenCL;
+      if (d.type == "gpu" && !d.simulator) return Backend::OpenCL;
     return Backend::Simd;
   } catch (const RuntimeError& e) {
     const std::string why = e.what();
@@ -136,7 +137,94 @@ std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig
 std::unique_ptr<Tracer> CreateEmbreeTracer(const Scene& scene, const TraceConfig& config);
 #endif
 
-std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
+namespace {
+
+// The first line of a message (a build failure's carries the build log).
+std::string FirstLine(const std::string& s) { return s.substr(0, s.find('\n')); }
+
+// `--backend auto` on OpenCL: every call goes to the OpenCL tracer until one
+// fails with a RuntimeError; from then on to a simd tracer, created then, and
+// the failed call is repeated there (Trace and TracePrimary overwrite their
+// outputs, so a half-done OpenCL call leaves nothing behind). Input errors
+// are not runtime failures and pass through.
+class FallbackTracer final : public Tracer {
+ public:
+  FallbackTracer(const Scene& scene, const TraceConfig& config) : scene_(scene), config_(config)
+  {
+    backend_ = Backend::OpenCL;
+    try {
+      primary_ = CreateOpenCLTracer(scene_, config_);
+      info_ = primary_->Info();
+    } catch (const RuntimeError& e) {
+      FallBack(e.what());
+    }
+  }
+
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* stats) override
+  {
+    // Counters of a failed OpenCL call are not added: stats->Add happens
+    // only after its last step, the read-back.
+    Guard([&] { Active().Trace(rays, hits, occlusion, stats); });
+  }
+  void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
+                    TraceStatsSum* stats) override
+  {
+    Guard([&] { Active().TracePrimary(frame, width, height, hits, stats); });
+  }
+  void Prepare(bool occlusion, bool primary) override { Guard([&] { Active().Prepare(occlusion, primary); }); }
+  void Describe(nlohmann::json& j) const override
+  {
+    if (simd_) {
+      j["fallback_from"] = "opencl";
+      j["fallback_reason"] = reason_;
+    }
+    Current().Describe(j);
+  }
+  std::string DeviceName() const override { return Current().DeviceName(); }
+  std::string VariantName() const override { return Current().VariantName(); }
+  std::string FallbackReason() const override { return reason_; }
+
+ private:
+  Tracer& Active() { return simd_ ? *simd_ : *primary_; }
+  const Tracer& Current() const { return simd_ ? *simd_ : *primary_; }
+
+  template <typename F>
+  void Guard(F&& call)
+  {
+    if (!simd_) {
+      try {
+        call();
+        return;
+      } catch (const RuntimeError& e) {
+        FallBack(e.what());
+      }
+    }
+    call();
+  }
+
+  void FallBack(const std::string& why)
+  {
+    reason_ = FirstLine(why);
+    Warn(fmt::format("{}; falling back to the simd backend (--backend auto)", reason_));
+    primary_.reset();
+    TraceConfig c = config_;
+    c.backend = Backend::Simd;
+    c.fallbackToSimd = false;
+    c.variant.clear();  // the OpenCL variant names mean nothing to simd: its default
+    c.device.clear();
+    simd_ = CreateSimdTracer(scene_, c);
+    info_ = simd_->Info();
+    backend_ = Backend::Simd;
+  }
+
+  const Scene& scene_;
+  TraceConfig config_;
+  std::unique_ptr<Tracer> primary_, simd_;
+  std::string reason_;
+};
+
+std::unique_ptr<Tracer> CreateBackend(const Scene& scene, const TraceConfig& config)
 {
   switch (config.backend) {
     case Backend::Reference: return std::make_unique<ReferenceBackend>(scene, config.unifiedHits);
@@ -151,6 +239,17 @@ std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& conf
 #endif
   }
   throw RuntimeError("unknown backend");
+}
+
+}  // namespace
+
+std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config)
+{
+  if (config.backend == Backend::OpenCL && config.fallbackToSimd)
+    return std::make_unique<FallbackTracer>(scene, config);
+  std::unique_ptr<Tracer> t = CreateBackend(scene, config);
+  t->backend_ = config.backend;
+  return t;
 }
 
 }  // namespace cr

@@ -21,10 +21,12 @@ namespace cr {
 // the build found it (CELLRAY_HAVE_EMBREE; EmbreeAvailable()).
 enum class Backend { Reference, Scalar, Simd, OpenCL, Embree };
 Backend ParseBackend(const std::string& s);  // InputError on unknown names
-// The backend `auto` stands for: opencl when an OpenCL GPU exists (or a
-// device is named by `deviceSpec` / $CELLRAY_DEVICE), else simd. With no
-// OpenCL platform installed at all it falls back to simd with a one-line
-// warning.
+// The backend `auto` stands for: opencl when an OpenCL GPU exists (a
+// simulator such as Oclgrind does not count) or a device is named by
+// `deviceSpec` / $CELLRAY_DEVICE, else simd. With no OpenCL platform
+// installed at all it falls back to simd with a one-line warning. When it
+// picks opencl, the caller sets TraceConfig::fallbackToSimd, so that a later
+// OpenCL failure falls back too (CreateTracer).
 Backend ResolveAutoBackend(const std::string& deviceSpec);
 const char* BackendName(Backend b);
 bool EmbreeAvailable();
@@ -46,6 +48,11 @@ struct TraceConfig {
   // Internal hit form for the renderer: HitRecord.prim is the unified piece
   // index g (kernels/types.h) and u, v are reported for every triangle piece.
   bool unifiedHits = false;
+  // `--backend auto` chose opencl: an OpenCL runtime failure (no such device,
+  // device not available, build, kernel limits, allocation, launch), at
+  // creation or in any later call, switches the tracer to simd with a
+  // one-line warning and repeats the call there, instead of ending the run.
+  bool fallbackToSimd = false;
 };
 
 // Sums of the per-ray measures over a batch.
@@ -92,9 +99,16 @@ class Tracer {
   // What actually ran (e.g. "avx2 packet"), for the JSON output.
   virtual std::string VariantName() const { return ""; }
   const AccelInfo& Info() const { return info_; }
+  // The backend that answers: the configured one, or simd once an `auto`
+  // tracer has fallen back (FallbackReason then says why, in one line).
+  virtual Backend ActiveBackend() const { return backend_; }
+  virtual std::string FallbackReason() const { return {}; }
 
  protected:
   AccelInfo info_;
+  Backend backend_ = Backend::Scalar;  // set by CreateTracer
+
+  friend std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config);
 };
 
 std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config);
