@@ -352,17 +352,20 @@ CR_COLD CR_FUNC real Triangle_PlaneTDf(const real org[3], const real dir[3], con
   if (nd.hi == 0.0f) return CR_INF;
   return Df_Div(Df_Dot3(n, p), nd).hi;
 }
-/* Whether Triangle_Intersect's float t (n . p / n . d from the products np)
+/* Whether Triangle_Intersect's float t (n . p / nd from the products np)
  * needs Triangle_PlaneTDf: n . p cancels by more than 16 (the shared vertex
  * far from the origin relative to the plane's distance: a huge triangle seen
- * from nearby, or a grazing view), and t, off by at most a quarter unless it
- * cancels by more than 2^18, may lie in [tmin, tmax]. */
-CR_FUNC int Triangle_PlaneNeedsDf(real np0, real np1, real np2, real t, real tmin, real tmax)
+ * from nearby, or a grazing view), and t may lie in [tmin, tmax]: widened by
+ * a quarter of t and by the dot product's own error over nd (2^-20 of the
+ * sum of the products' magnitudes, generously), which keeps a ray leaving a
+ * triangle (t slightly negative, n . p cancelling completely) on the float
+ * path. */
+CR_FUNC int Triangle_PlaneNeedsDf(real np0, real np1, real np2, real nd, real t, real tmin, real tmax)
 {
-  const real sum = (fabs(np0) + fabs(np1)) + fabs(np2), np = fabs((np0 + np1) + np2);
-  if (!(sum > 16.0f * np)) return 0;
-  if (sum > 0x1.0p18f * np) return 1;
-  return t + 0.25f * fabs(t) >= tmin && t - 0.25f * fabs(t) <= tmax;
+  const real sum = (fabs(np0) + fabs(np1)) + fabs(np2);
+  if (!(sum > 16.0f * fabs((np0 + np1) + np2))) return 0;
+  const real slack = 0.25f * fabs(t) + 0x1.0p-20f * sum / fabs(nd);
+  return t + slack >= tmin && t - slack <= tmax;
 }
 
 /* One watertight edge function P'x Q'y - P'y Q'x of the vertices p, q
@@ -381,12 +384,10 @@ CR_FUNC real Triangle_EdgeDf(const Ray* r, const real p[3], const real q[3])
   const Df qx = Triangle_ShearDf(r, q, r->kx), qy = Triangle_ShearDf(r, q, r->ky);
   return Df_Sub(Df_Mul(px, qy), Df_Mul(py, qx)).hi;
 }
-/* L1 norm of v - o in float: the scale of the rounding of v's sheared
- * coordinates (|sx|, |sy| <= 1: kz is the dominant axis). */
-CR_FUNC real Triangle_VertexScale(const Ray* r, const real v[3])
-{
-  return (fabs(v[0] - r->org[0]) + fabs(v[1] - r->org[1])) + fabs(v[2] - r->org[2]);
-}
+/* L1 norm of a translated vertex v - o (its components in the ray's axis
+ * order kx, ky, kz): the scale of the rounding of its sheared coordinates
+ * (|sx|, |sy| <= 1: kz is the dominant axis). */
+CR_FUNC real Triangle_Norm1(real x, real y, real z) { return (fabs(x) + fabs(y)) + fabs(z); }
 /* All three edge functions in double-float (Triangle_Intersect's cold path
  * for a degenerate projection). */
 CR_COLD CR_FUNC void Triangle_EdgesDf(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
@@ -405,12 +406,8 @@ CR_COLD CR_FUNC void Triangle_EdgesDf(const Ray* r, const Triangle* tri, real* U
  * 2^-19 times the product of their vertices' translated L1 norms (the bound
  * of Triangle_RefineEdges with a margin of 2 instead of 4). Arguments: the
  * translated vertices in the ray's axis order (kx, ky, kz). */
-CR_FUNC int Triangle_EdgesUndecided(real ax, real ay, real az, real bx, real by, real bz, real cx, real cy, real cz,
-                                    real U, real V, real W)
+CR_FUNC int Triangle_EdgesUndecided(real nA, real nB, real nC, real U, real V, real W)
 {
-  const real nA = (fabs(ax) + fabs(ay)) + fabs(az);
-  const real nB = (fabs(bx) + fabs(by)) + fabs(bz);
-  const real nC = (fabs(cx) + fabs(cy)) + fabs(cz);
   return fabs(U) <= 0x1.0p-19f * (nB * nC) && fabs(V) <= 0x1.0p-19f * (nC * nA) && fabs(W) <= 0x1.0p-19f * (nA * nB);
 }
 
@@ -419,10 +416,18 @@ CR_FUNC int Triangle_EdgesUndecided(real ax, real ay, real az, real bx, real by,
  * where float's error, relative to |v - o|, can exceed check.h's tolerance,
  * relative to |o| + t |d|): a flagged edge whose value lies within its
  * rounding error of 0, 2^-18 |P - o|_1 |Q - o|_1 (translation, shear and
- * products each err by a few u times these magnitudes), is recomputed in
- * double-float. An edge's flag, bound and value depend on the edge alone,
- * so both triangles sharing it decide alike and the test stays watertight. */
-CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
+ * products each err by a few u times these magnitudes; nA, nB, nC are the
+ * vertices' norms, Triangle_Norm1), is recomputed in double-float. An edge's
+ * flag, bound and value depend on the edge alone, so both triangles sharing
+ * it decide alike and the test stays watertight. */
+CR_FUNC int Triangle_LongEdgeUndecided(uint flags, real nA, real nB, real nC, real U, real V, real W)
+{
+  return ((flags & CR_TRI_LONG_U) && fabs(U) <= 0x1.0p-18f * (nB * nC)) ||
+         ((flags & CR_TRI_LONG_V) && fabs(V) <= 0x1.0p-18f * (nC * nA)) ||
+         ((flags & CR_TRI_LONG_W) && fabs(W) <= 0x1.0p-18f * (nA * nB));
+}
+CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real nA, real nB, real nC, real* U,
+                                          real* V, real* W)
 {
   real v0[3], v1[3], v2[3];
   CR_UNROLL for (int i = 0; i < 3; ++i) {
@@ -430,10 +435,9 @@ CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, rea
     v1[i] = tri->v1[i];
     v2[i] = tri->v2[i];
   }
-  const real n0 = Triangle_VertexScale(r, v0), n1 = Triangle_VertexScale(r, v1), n2 = Triangle_VertexScale(r, v2);
-  if ((tri->flags & CR_TRI_LONG_U) && fabs(*U) <= 0x1.0p-18f * (n1 * n2)) *U = Triangle_EdgeDf(r, v2, v1);
-  if ((tri->flags & CR_TRI_LONG_V) && fabs(*V) <= 0x1.0p-18f * (n2 * n0)) *V = Triangle_EdgeDf(r, v0, v2);
-  if ((tri->flags & CR_TRI_LONG_W) && fabs(*W) <= 0x1.0p-18f * (n0 * n1)) *W = Triangle_EdgeDf(r, v1, v0);
+  if ((tri->flags & CR_TRI_LONG_U) && fabs(*U) <= 0x1.0p-18f * (nB * nC)) *U = Triangle_EdgeDf(r, v2, v1);
+  if ((tri->flags & CR_TRI_LONG_V) && fabs(*V) <= 0x1.0p-18f * (nC * nA)) *V = Triangle_EdgeDf(r, v0, v2);
+  if ((tri->flags & CR_TRI_LONG_W) && fabs(*W) <= 0x1.0p-18f * (nA * nB)) *W = Triangle_EdgeDf(r, v1, v0);
 }
 
 /* Cone_Intersect in double-float from the exact apex - base and o - base:
@@ -645,7 +649,12 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   real V = Ax * Cy - Ay * Cx;
   real W = Bx * Ay - By * Ax;
 #ifndef CR_FP64
-  if (tri->flags & CR_TRI_LONG_EDGES) Triangle_RefineEdges(r, tri, &U, &V, &W);
+  if (tri->flags & CR_TRI_LONG_EDGES) {
+    const real nA = Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz));
+    const real nB = Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz));
+    const real nC = Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz));
+    if (Triangle_LongEdgeUndecided(tri->flags, nA, nB, nC, U, V, W)) Triangle_RefineEdges(r, tri, nA, nB, nC, &U, &V, &W);
+  }
 #endif
   if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
     return 0;
@@ -660,8 +669,9 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
    * the neighbour that shares it (which missed, in float, on that edge) and
    * could let a ray through; with all three edges below their rounding the
    * hit is marginal anyway, and no ray from inside a mesh sees one. */
-  if (Triangle_EdgesUndecided(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz), CR_PICK3(B, kx), CR_PICK3(B, ky),
-                              CR_PICK3(B, kz), CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz), U, V, W)) {
+  if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
+                              Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
+                              Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), U, V, W)) {
     Triangle_EdgesDf(r, tri, &U, &V, &W);
     if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
       return 0;
@@ -687,7 +697,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   const real np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   real t = ((np0 + np1) + np2) / nd;
 #ifndef CR_FP64
-  if (Triangle_PlaneNeedsDf(np0, np1, np2, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
+  if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
 #endif
   if (!(t >= tmin && t <= tmax)) return 0;
   const real invDet = (real)1.0f / det;

@@ -91,15 +91,6 @@ CR_SIMD_INLINE vbool<N> Box_IntersectBoxes(const float* const nearPlane[3], cons
   return Box_Finish<kFast, N>(n, f, tmin, tmax, tEnter);
 }
 
-// The window of the double-float cold paths: [t0, t1] widened by a quarter
-// on either side meets [tmin, tmax] (kernels/intersect.h, Quadratic_NeedsDf).
-template <int N>
-CR_SIMD_INLINE vbool<N> Window25N(vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
-{
-  const vfloat<N> q(0.25f);
-  return (t1 + q * Abs(t1) >= tmin) & (t0 - q * Abs(t0) <= tmax);
-}
-
 // Quadratic_Roots: roots of a t^2 + 2 bh t + c given disc >= 0, smaller
 // first; the Vieta root c/q gives way to the direct root (sq - bh)/a when q is
 // so small that c's own rounding (about eps * cScale) dominates.
@@ -252,13 +243,13 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
 // where n . p cancels by more than 16 (Triangle_Intersect's cold-path rule).
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], vfloat<N> nd,
-                                            vbool<N>& inexact, vbool<N>& veryInexact)
+                                            vbool<N>& inexact, vfloat<N>& sumOverNd)
 {
   const vfloat<N> np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   const vfloat<N> np = (np0 + np1) + np2;
-  const vfloat<N> sum = (Abs(np0) + Abs(np1)) + Abs(np2), anp = Abs(np);
-  inexact = sum > vfloat<N>(16.0f) * anp;
-  veryInexact = sum > vfloat<N>(0x1.0p18f) * anp;
+  const vfloat<N> sum = (Abs(np0) + Abs(np1)) + Abs(np2);
+  inexact = sum > vfloat<N>(16.0f) * Abs(np);
+  sumOverNd = vfloat<N>(0x1.0p-20f) * sum / Abs(nd);
   return np / nd;
 }
 
@@ -270,7 +261,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
                                           const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss,
-                                          vbool<N>& inexact, vbool<N>& veryInexact)
+                                          vbool<N>& inexact, vfloat<N>& sumOverNd)
 {
   vfloat<N> e0[3], e1[3], e2[3];
   for (int i = 0; i < 3; ++i) {
@@ -296,7 +287,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   n[2] = ea[0] * eb[1] - ea[1] * eb[0];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, inexact, veryInexact);
+  return Triangle_PlaneDivN<N>(n, p, nd, inexact, sumOverNd);
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
@@ -305,7 +296,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
 // simd/CMakeLists.txt), which gives every lane Triangle_PlaneTN's bits.
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> org[3], const vfloat<N> dir[3],
-                                           vbool<N>& miss, vbool<N>& inexact, vbool<N>& veryInexact)
+                                           vbool<N>& miss, vbool<N>& inexact, vfloat<N>& sumOverNd)
 {
   float nf[3];
   const int shared = Triangle_PlaneNormal(&tri, nf);
@@ -315,7 +306,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
   for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, inexact, veryInexact);
+  return Triangle_PlaneDivN<N>(n, p, nd, inexact, sumOverNd);
 }
 
 // Plane sources for Triangle_WatertightN: T(org, dir, miss, inexact) gives
@@ -326,13 +317,14 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
 template <int N>
 struct VecPlane {
   const vfloat<N> (&vtx)[3][4];
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
   {
-    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss, inexact, vi);
+    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss, inexact, son);
   }
   // Lanes whose triangle has long edges (the flags word rides in v0's
   // fourth float).
   unsigned LongEdgeLanes() const { return MaskedLanes(vtx[0][3], CR_TRI_LONG_EDGES); }
+  unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vtx[0][3], bit); }
   Triangle Tri(int l) const
   {
     Triangle t{};
@@ -349,7 +341,7 @@ template <int N>
 struct PackPlane {
   const float (&pv)[3][3][N];
   const std::uint32_t (&flags)[N];
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
   {
     vfloat<N> v0[3], v1[3], v2[3];
     for (int i = 0; i < 3; ++i) {
@@ -357,9 +349,10 @@ struct PackPlane {
       v1[i] = vfloat<N>::Load(pv[1][i]);
       v2[i] = vfloat<N>::Load(pv[2][i]);
     }
-    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, inexact, vi);
+    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, inexact, son);
   }
   unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
+  unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vint<N>::Load(flags), bit); }
   Triangle Tri(int l) const
   {
     Triangle t{};
@@ -375,11 +368,12 @@ struct PackPlane {
 template <int N>
 struct OnePlane {
   const Triangle& tri;
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vbool<N>& vi) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
   {
-    return Triangle_PlaneT1N<N>(tri, org, dir, miss, inexact, vi);
+    return Triangle_PlaneT1N<N>(tri, org, dir, miss, inexact, son);
   }
   unsigned LongEdgeLanes() const { return tri.flags & CR_TRI_LONG_EDGES ? (1u << N) - 1u : 0u; }
+  unsigned FlagLanes(std::uint32_t bit) const { return tri.flags & bit ? (1u << N) - 1u : 0u; }
   Triangle Tri(int) const { return tri; }
 };
 
@@ -388,8 +382,8 @@ struct OnePlane {
 // triangle from the plane source.
 template <int N, class PlaneFn>
 __attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
-                                                           const vfloat<N> dir[3], vfloat<N>& U, vfloat<N>& V,
-                                                           vfloat<N>& W)
+                                                           const vfloat<N> dir[3], vfloat<N> nA, vfloat<N> nB,
+                                                           vfloat<N> nC, vfloat<N>& U, vfloat<N>& V, vfloat<N>& W)
 {
   alignas(32) float u[N], v[N], w[N];
   U.Store(u);
@@ -404,7 +398,7 @@ __attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const 
     Ray ray;
     Ray_Init(&ray, &rec);
     const Triangle tri = plane.Tri(l);
-    Triangle_RefineEdges(&ray, &tri, &u[l], &v[l], &w[l]);
+    Triangle_RefineEdges(&ray, &tri, nA[l], nB[l], nC[l], &u[l], &v[l], &w[l]);
   }
   U = vfloat<N>::Load(u);
   V = vfloat<N>::Load(v);
@@ -456,9 +450,19 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   vfloat<N> U = Cx * By - Cy * Bx;
   vfloat<N> V = Ax * Cy - Ay * Cx;
   vfloat<N> W = Bx * Ay - By * Ax;
-  // Triangles with long edges: the scalar kernels' Triangle_RefineEdges,
-  // lane by lane.
-  if (const unsigned longLanes = plane.LongEdgeLanes()) Triangle_RefineEdgesN<N>(longLanes, plane, org, dir, U, V, W);
+  // Triangles with long edges: a flagged edge within its rounding bound
+  // (Triangle_LongEdgeUndecided) takes the scalar kernels'
+  // Triangle_RefineEdges, lane by lane.
+  if (plane.LongEdgeLanes()) {
+    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
+    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
+    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
+    const vfloat<N> k(0x1.0p-18f);
+    const unsigned undecided = (plane.FlagLanes(CR_TRI_LONG_U) & (Abs(U) <= k * (nB * nC)).Bits()) |
+                               (plane.FlagLanes(CR_TRI_LONG_V) & (Abs(V) <= k * (nC * nA)).Bits()) |
+                               (plane.FlagLanes(CR_TRI_LONG_W) & (Abs(W) <= k * (nA * nB)).Bits());
+    if (undecided) Triangle_RefineEdgesN<N>(undecided, plane, org, dir, nA, nB, nC, U, V, W);
+  }
   const vfloat<N> zero(0.0f);
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
   vfloat<N> det = U + V + W;
@@ -492,9 +496,11 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   // t from the triangle's plane, as kernels/intersect.h computes it (in world
   // axis order, which the sums' rounding depends on); where n . p cancels
   // and t may lie in [tmin, tmax], from double-float (Triangle_PlaneTDf).
-  vbool<N> inexact, veryInexact;
-  vfloat<N> t = plane.T(org, dir, miss, inexact, veryInexact);
-  const vbool<N> refine = AndNot(inexact & (veryInexact | Window25N<N>(t, t, tmin, tmax)), miss);
+  vbool<N> inexact;
+  vfloat<N> sumOverNd;
+  vfloat<N> t = plane.T(org, dir, miss, inexact, sumOverNd);
+  const vfloat<N> slack = vfloat<N>(0.25f) * Abs(t) + sumOverNd;
+  const vbool<N> refine = AndNot(inexact & (t + slack >= tmin) & (t - slack <= tmax), miss);
   if (Any(refine)) {
     vbool<N> all(true);
     RefineLanesN<N>(refine.Bits(), [&](int l, float* th) {
