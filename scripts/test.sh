@@ -9,13 +9,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 stages=" ${CELLRAY_TEST_STAGES:-ci asan fuzz} "
+stage_done() { echo "cellray: test stage $1 passed in $((SECONDS - $2)) s"; }
 if [[ $stages == *" ci "* ]]; then
+  t0=$SECONDS
   bash scripts/build.sh ci
   ctest --preset ci -j "$(nproc)" "$@"
+  stage_done ci "$t0"
 fi
 if [[ $stages == *" asan "* ]]; then
+  t0=$SECONDS
   bash scripts/sanitize.sh
+  stage_done asan "$t0"
 fi
 if [[ $stages == *" fuzz "* ]]; then
+  t0=$SECONDS
   bash scripts/fuzz.sh smoke
+  stage_done fuzz "$t0"
 fi
