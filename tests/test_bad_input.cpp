@@ -145,6 +145,8 @@ TEST_CASE("bad OBJ and view files are rejected with FILE:LINE")
   ExpectSceneError("ref.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 three\n", ":4: 'f': bad vertex reference 'three'");
   ExpectSceneError("empty.obj", "", ": empty scene file");
   ExpectSceneError("nofaces.obj", "v 0 0 0\n", ": no geometry: the file has no 'f' line");
+  // tinyobjloader reads C strings; a NUL would hide the rest of its line from it.
+  ExpectSceneError("nul.obj", std::string("v 0 0 0\r\nv 1 0 0 \0 9\n", 21), ":2: NUL byte: not a text file");
   // A view file may hold v, b, l and comments only.
   Write("withview.view", "l 1 1 1\ns 0 0 0 1\n");
   {

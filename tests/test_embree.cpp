@@ -28,7 +28,7 @@ TEST_CASE("embree: robust variants give 0 wrong on SPD scenes with every primiti
     MESSAGE("SKIPPED: this build has no Embree");
     return;
   }
-  for (const char* name : {"tetra", "teapot", "balls", "rings", "tree"}) {
+  for (const std::string& name : test::Scenes({"tetra", "teapot", "balls", "rings", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse}) {
       const auto rays = test::MakeRays(scene, kind, 48);

@@ -384,7 +384,7 @@ TEST_CASE("octree: random rays snapped to cell planes, with +-0 direction compon
 {
   // Origins anywhere in the root cube with some coordinates moved exactly
   // onto a cell plane of a random level; some direction components +0 or -0.
-  for (const char* name : {"balls", "teapot", "rings", "tetra"}) {
+  for (const std::string& name : test::Scenes({"balls", "teapot", "rings", "tetra"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     const OctreeHeader h = HeaderOf(scene, AccelParams{});
     std::vector<RayRecord> rays;

@@ -127,7 +127,7 @@ TEST_CASE("a huge ground (a sphere of radius 1e6, a quad 2e6 across) neither sha
 TEST_CASE("images agree across structures and backends (PSNR >= 60 dB) and with the reference")
 {
   const AccelKind accels[] = {AccelKind::BVH};
-  for (const char* name : {"balls", "gears", "mount", "rings", "teapot", "tetra", "tree"}) {
+  for (const std::string& name : test::Scenes({"balls", "gears", "mount", "rings", "teapot", "tetra", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     RenderOptions ro;
     ro.spd = true;  // corner rays averaged, as the acceptance renders are

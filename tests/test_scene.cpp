@@ -1,5 +1,8 @@
 // Scene loading: SPD primitive counts, NFF statements, triangulation.
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 
 #include "core/error.h"
 #include "core/file_util.h"
@@ -220,4 +223,30 @@ TEST_CASE("SPD camera: tetra corner rays hit 49,788 times (+-0.5%), every balls 
       CHECK(n == rays.size());
     }
   }
+}
+
+TEST_CASE("OBJ: lines end and comments stop where tinyobjloader sees them (found by fuzz_obj)")
+{
+  // A lone '\r' ends a line for tinyobjloader, and it knows no trailing
+  // comments: before the fix, "f 1 2 3#x 99" reached it whole, it read a 4th
+  // reference (99) that no check had seen, and the next face read vertex 99
+  // out of bounds (ASan heap-buffer-overflow; tests/fuzz/corpus/obj/regress_*).
+  const std::string dir = (std::filesystem::temp_directory_path() / ("cellray_obj_" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/lines.obj";
+  const std::string text = "v -1 -1 0\rv 1 -1 0\r\nv 0 1 0\r"  // lines 1-3, three line ends
+                           "f 1 2 3#x 99\n"                     // line 4: a comment from '#'
+                           "v 0 0 5 # apex\n"                   // line 5
+                           "f 1 2 4 # x 98\n";                   // line 6
+  WriteFileAtomically(path, text.data(), text.size());
+  SetWarningsQuiet(true);
+  Scene s = LoadOBJ(path);
+  SetWarningsQuiet(false);
+  REQUIRE(s.NumPrims() == 2);
+  CHECK(s.prims[0].line == 4u);
+  CHECK(s.prims[1].line == 6u);
+  REQUIRE(s.triangles.size() == 2);
+  CHECK(s.triangles[0].v2[1] == 1.0f);
+  CHECK(s.triangles[1].v2[2] == 5.0f);
+  std::filesystem::remove_all(dir);
 }

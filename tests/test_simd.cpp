@@ -136,7 +136,7 @@ TEST_CASE("simd: fast precision returns the scalar fast kernels' answers")
 {
   const auto isas = AvailableIsas();
   if (isas.empty()) return;
-  for (const char* name : {"balls", "gears", "tree", "lattice"}) {
+  for (const std::string& name : test::Scenes({"balls", "gears", "tree", "lattice"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Random}) {
       const auto rays = test::MakeRays(scene, kind, 32);

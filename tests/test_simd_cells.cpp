@@ -114,7 +114,7 @@ TEST_CASE("simd grid and octree: rays on cell planes with +-0 directions, bit fo
     MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2");
     return;
   }
-  for (const char* name : {"balls", "teapot", "rings", "tetra", "tree"}) {
+  for (const std::string& name : test::Scenes({"balls", "teapot", "rings", "tetra", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (AccelKind accel : kCellAccels) {
       const auto rays = accel == AccelKind::Grid ? GridSnappedRays(scene, 3000) : OctreeSnappedRays(scene, 3000);
@@ -153,7 +153,7 @@ TEST_CASE("simd grid and octree: per-ray statistics equal the scalar backend's")
 {
   const auto isas = AvailableIsas();
   if (isas.empty()) return;
-  for (const char* name : {"tree", "gears"}) {
+  for (const std::string& name : test::Scenes({"tree", "gears"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
       const auto rays = test::MakeRays(scene, kind, 32);

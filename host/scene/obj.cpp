@@ -3,6 +3,9 @@
 // numbers and reads a malformed number as 0, so a light validation pass runs
 // first: it rejects what tinyobjloader would silently accept, with FILE:LINE,
 // and records every `f` line (a face's id is its position among them).
+// tinyobjloader trusts every face index it reads, so it must read exactly the
+// lines that were validated: the pass hands it the text as validated (one
+// '\n' per line, comments cut off), not the file.
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -57,21 +60,32 @@ void CheckNumber(std::string_view tok, const std::string& path, long line, const
     throw InputError(path, line, fmt::format("{} '{}' is not a finite float", what, tok));
 }
 
-// Validates the text; returns the face lines in order.
-std::vector<FaceLine> Validate(std::string_view text, const std::string& path)
+// Validates the text; returns the face lines in order, and in `clean` the
+// text for tinyobjloader. Lines end as tinyobjloader ends them ("\n", "\r\n"
+// or a lone "\r"); a comment runs from '#' to the end of its line, where
+// tinyobjloader knows only whole-line comments and would read the rest of
+// "f 1 2 3#x 9" as more vertex references, unchecked.
+std::vector<FaceLine> Validate(std::string_view text, const std::string& path, std::string& clean)
 {
   std::vector<FaceLine> faces;
   long nV = 0, nVT = 0, nVN = 0;
   long line = 0;
   std::set<std::string> warned;
+  clean.clear();
+  clean.reserve(text.size() + 1);
   std::size_t pos = 0;
   while (pos < text.size()) {
     ++line;
-    std::size_t e = text.find('\n', pos);
+    std::size_t e = text.find_first_of("\r\n", pos);
     if (e == std::string_view::npos) e = text.size();
     std::string_view ln = text.substr(pos, e - pos);
     pos = e + 1;
+    if (e + 1 < text.size() && text[e] == '\r' && text[e + 1] == '\n') ++pos;
     if (auto h = ln.find('#'); h != std::string_view::npos) ln = ln.substr(0, h);
+    // tinyobjloader reads C strings: a NUL would end its line early.
+    if (ln.find('\0') != std::string_view::npos) throw InputError(path, line, "NUL byte: not a text file");
+    clean.append(ln);
+    clean.push_back('\n');
     auto tok = Split(ln);
     if (tok.empty()) continue;
     const std::string_view kw = tok[0];
@@ -126,8 +140,11 @@ Scene LoadOBJ(const std::string& path)
   std::string text(data.data(), data.size());
   data.clear();
   data.shrink_to_fit();
-  std::vector<FaceLine> faces = Validate(text, path);
+  std::string clean;
+  std::vector<FaceLine> faces = Validate(text, path, clean);
   if (faces.empty()) throw InputError(path, 0, text.empty() ? "empty scene file" : "no geometry: the file has no 'f' line");
+  text.clear();
+  text.shrink_to_fit();
 
   Scene scene;
   scene.path = path;
@@ -147,10 +164,10 @@ Scene LoadOBJ(const std::string& path)
   config.triangulate = false;
   config.vertex_color = false;
   tinyobj::ObjReader reader;
-  if (!reader.ParseFromString(text, "", config))
+  if (!reader.ParseFromString(clean, "", config))
     throw InputError(path, 0, fmt::format("tinyobjloader: {}", reader.Error()));
-  text.clear();
-  text.shrink_to_fit();
+  clean.clear();
+  clean.shrink_to_fit();
   const auto& verts = reader.GetAttrib().vertices;
 
   // tinyobjloader drops faces of fewer than 3 vertices and stores face sizes in
@@ -180,6 +197,10 @@ Scene LoadOBJ(const std::string& path)
       poly.clear();
       for (std::uint32_t j = 0; j < f.nVerts; ++j) {
         int vi = idx[k + j].vertex_index;
+        // Validate checked every index; this guards the read should tinyobjloader ever see another one.
+        if (vi < 0 || std::size_t(vi) >= verts.size() / 3)
+          throw RuntimeError(fmt::format("{}:{}: tinyobjloader read vertex index {} of {}", path, f.line, vi + 1,
+                                         verts.size() / 3));
         poly.emplace_back(verts[3 * std::size_t(vi)], verts[3 * std::size_t(vi) + 1], verts[3 * std::size_t(vi) + 2]);
       }
       k += f.nVerts;
