@@ -377,13 +377,14 @@ struct OnePlane {
   Triangle Tri(int) const { return tri; }
 };
 
-// Triangle_RefineEdges of kernels/intersect.h for the lanes of `bits`: the
-// lane's ray prepared as the scalar kernels prepare it (Ray_Init), its
-// triangle from the plane source.
-template <int N, class PlaneFn>
-__attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
-                                                           const vfloat<N> dir[3], vfloat<N> nA, vfloat<N> nB,
-                                                           vfloat<N> nC, vfloat<N>& U, vfloat<N>& V, vfloat<N>& W)
+// The lanes of `bits` run a scalar kernel edge routine on their edge
+// functions: refine(ray, tri, l, &U, &V, &W) with the lane's ray prepared as
+// the scalar kernels prepare it (Ray_Init) and its triangle from the plane
+// source (Triangle_RefineEdges, Triangle_EdgesDf of kernels/intersect.h).
+template <int N, class PlaneFn, class Refine>
+__attribute__((noinline, cold)) void Triangle_EdgeLanesN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
+                                                         const vfloat<N> dir[3], vfloat<N>& U, vfloat<N>& V,
+                                                         vfloat<N>& W, Refine&& refine)
 {
   alignas(32) float u[N], v[N], w[N];
   U.Store(u);
@@ -398,33 +399,7 @@ __attribute__((noinline, cold)) void Triangle_RefineEdgesN(unsigned bits, const 
     Ray ray;
     Ray_Init(&ray, &rec);
     const Triangle tri = plane.Tri(l);
-    Triangle_RefineEdges(&ray, &tri, nA[l], nB[l], nC[l], &u[l], &v[l], &w[l]);
-  }
-  U = vfloat<N>::Load(u);
-  V = vfloat<N>::Load(v);
-  W = vfloat<N>::Load(w);
-}
-
-// Triangle_EdgesDf of kernels/intersect.h for the lanes of `bits`.
-template <int N, class PlaneFn>
-__attribute__((noinline, cold)) void Triangle_EdgesDfN(unsigned bits, const PlaneFn& plane, const vfloat<N> org[3],
-                                                       const vfloat<N> dir[3], vfloat<N>& U, vfloat<N>& V,
-                                                       vfloat<N>& W)
-{
-  alignas(32) float u[N], v[N], w[N];
-  U.Store(u);
-  V.Store(v);
-  W.Store(w);
-  for (; bits; bits &= bits - 1) {
-    const int l = LowestBit(bits);
-    RayRecord rec{};
-    Lane3<N>(org, l, rec.org);
-    Lane3<N>(dir, l, rec.dir);
-    rec.tmax = __builtin_inff();
-    Ray ray;
-    Ray_Init(&ray, &rec);
-    const Triangle tri = plane.Tri(l);
-    Triangle_EdgesDf(&ray, &tri, &u[l], &v[l], &w[l]);
+    refine(ray, tri, l, &u[l], &v[l], &w[l]);
   }
   U = vfloat<N>::Load(u);
   V = vfloat<N>::Load(v);
@@ -461,7 +436,11 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     const unsigned undecided = (plane.FlagLanes(CR_TRI_LONG_U) & (Abs(U) <= k * (nB * nC)).Bits()) |
                                (plane.FlagLanes(CR_TRI_LONG_V) & (Abs(V) <= k * (nC * nA)).Bits()) |
                                (plane.FlagLanes(CR_TRI_LONG_W) & (Abs(W) <= k * (nA * nB)).Bits());
-    if (undecided) Triangle_RefineEdgesN<N>(undecided, plane, org, dir, nA, nB, nC, U, V, W);
+    if (undecided)
+      Triangle_EdgeLanesN<N>(undecided, plane, org, dir, U, V, W,
+                             [&](const Ray& ray, const Triangle& tri, int l, float* u, float* v, float* w) {
+                               Triangle_RefineEdges(&ray, &tri, nA[l], nB[l], nC[l], u, v, w);
+                             });
   }
   const vfloat<N> zero(0.0f);
   vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
@@ -483,7 +462,10 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     const vbool<N> undecided = AndNot(
         (Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB)), miss);
     if (Any(undecided)) {
-      Triangle_EdgesDfN<N>(undecided.Bits(), plane, org, dir, U, V, W);
+      Triangle_EdgeLanesN<N>(undecided.Bits(), plane, org, dir, U, V, W,
+                             [](const Ray& ray, const Triangle& tri, int, float* u, float* v, float* w) {
+                               Triangle_EdgesDf(&ray, &tri, u, v, w);
+                             });
       miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
       det = U + V + W;
       miss = miss | (det == zero);

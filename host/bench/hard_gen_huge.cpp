@@ -64,6 +64,17 @@ void SetTargets(HardCase& c, double minCos, double edgeFrac)
   for (std::size_t i = 0; i < c.rays.size(); ++i) c.target[i] = RobustTarget(tr, c.rays[i], minCos, edgeFrac);
 }
 
+// A case of the family: its scene, judged by robust targets (SetTargets).
+HardCase TargetCase(const char* name, SceneBuilder& b)
+{
+  HardCase c;
+  c.name = name;
+  c.scene = b.Finish();
+  c.expect = Expect::Target;
+  c.relTolT = kRelTolT;
+  return c;
+}
+
 // Unit vector at polar angle theta from axis n (unit), azimuth phi.
 glm::dvec3 AroundAxis(const glm::dvec3& n, double theta, double phi)
 {
@@ -84,11 +95,7 @@ HardCase GroundSphere(const char* name, double R0, const glm::dvec3& up, const G
   SceneBuilder b;
   const glm::dvec3 centre = -R0 * up;
   b.Sphere(centre, R0 - 1.0);
-  HardCase c;
-  c.name = name;
-  c.scene = b.Finish();
-  c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  HardCase c = TargetCase(name, b);
   const std::size_t n = o.quick ? 1500 : 15000;
   const double heights[] = {10.0, 30.0, 100.0};
   const glm::dvec3 side = glm::normalize(glm::cross(up, glm::dvec3(0.0, 0.0, 1.0) + 0.3 * up));
@@ -142,11 +149,7 @@ HardCase TiltedTriangles(const GenOptions& o)
   const glm::dvec3 p2 = glm::dvec3(3e5, -2e5, 1e5);
   b.Triangle(p2 - 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 + 1e6 * f2);
   b.Triangle(p2 - 1e6 * f1 - 1e6 * f2, p2 + 1e6 * f1 + 1e6 * f2, p2 - 1e6 * f1 + 1e6 * f2);
-  HardCase c;
-  c.name = "huge/tilted-triangles";
-  c.scene = b.Finish();
-  c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  HardCase c = TargetCase("huge/tilted-triangles", b);
   const std::size_t n = o.quick ? 1500 : 15000;
   for (std::size_t k = 0; k < n; ++k) {
     const bool second = k % 3 == 2;
@@ -181,11 +184,7 @@ HardCase HugeCones(const GenOptions& o)
   const double R0 = 1e6;
   b.Cone({0.0, -R0, -R0}, R0 - 1.0, {0.0, -R0, R0}, R0 - 1.0);
   b.Cone({-5e5, 50.0, -200.0}, 1.0, {5e5, 50.0, -200.0}, 2.0);
-  HardCase c;
-  c.name = "huge/cones";
-  c.scene = b.Finish();
-  c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  HardCase c = TargetCase("huge/cones", b);
   const std::size_t n = o.quick ? 1500 : 15000;
   for (std::size_t k = 0; k < n; ++k) {
     glm::dvec3 cam, dir;
@@ -243,11 +242,7 @@ HardCase Mixed(const GenOptions& o)
     }
     feature.push_back(g + glm::dvec3(0.0, 1e-4, 0.0));
   }
-  HardCase c;
-  c.name = "huge/mixed-scales";
-  c.scene = b.Finish();
-  c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  HardCase c = TargetCase("huge/mixed-scales", b);
   const std::size_t n = o.quick ? 1500 : 15000;
   for (std::size_t k = 0; k < n; ++k) {
     const glm::dvec3 f = feature[k % feature.size()];
