@@ -273,40 +273,65 @@ CR_FUNC void Df_QuadraticRoots(Df a, Df bh, Df c, Df disc, real* t0, real* t1)
   *t1 = fmax(r0, r1);
 }
 
-/* When the float roots of Sphere_Intersect or Cone_Intersect may be off by
- * more than a few ulps, and one of them may lie in [tmin, tmax]. Off: c
- * cancels (cScale > 8 |c|: the origin near the surface relative to its
- * distance from the centre, as under a ground sphere), or q = -(bh +-
- * sqrt(disc)) carries the error of a discriminant that cancels (dScale > 8
- * sqrt(disc) (|bh| + sqrt(disc)), compared squared, conservatively, without
- * the root). May lie in range: the roots widened by what they can be off,
- * a quarter of t (q's error is below 1/16 unless dScale exceeds 2^18 times
- * the same measure, when the test is always redone) plus c's own error
- * carried by the Vieta root c/q (2^-18 cScale / |q|, generously). */
-CR_FUNC int Quadratic_NeedsDf(real c, real cScale, real bh, real disc, real dScale, real q, real t0, real t1,
-                              real tmin, real tmax)
+/* When the float roots of Sphere_Intersect may be off by more than a few
+ * ulps, and one of them may lie in [tmin, tmax]. Off: c cancels (cScale > 8
+ * |c|: the origin near the surface relative to its distance from the centre,
+ * as under a ground sphere), or q = -(bh +- sqrt(disc)) carries the error of a
+ * discriminant that cancels (dScale > 8 sqrt(disc) (|bh| + sqrt(disc)),
+ * compared squared, conservatively, without the root; always redone past
+ * 2^18 times that measure). May lie in range: each root within its own
+ * window, so that a ray leaving the surface (c cancels, one root near 0) is
+ * redone only when that near root may lie in range, never because the other
+ * root is far away. The windows, to first order, generously (u = 2^-24):
+ * - disc = a r^2 - cc is off by at most 8u sqrt(a ff cc) (the cross product's
+ *   components cancel) + 6u dScale, its root by that over 2 sqrt(disc); bh
+ *   by 5u sqrt(a ff); so q by eq below, and relatively by rel;
+ * - the root q / a is within rel of itself; c / q too, plus c's error (6u
+ *   cScale) over |q|: e; where Quadratic_Roots takes (sq - bh) / a instead
+ *   (16 q^2 < a cScale) that root carries eq / a, rel of the other root, so
+ *   both windows take the larger root's share (m).
+ * First order holds: disc's error is below a quarter of disc wherever this
+ * is reached (Sphere_DiscUndecided and the 2^36 rule took the rest). */
+CR_FUNC int Sphere_NeedsDf(real c, real cScale, real bh, real disc, real dScale, real q, real a, real ff, real cc,
+                           real t0, real t1, real tmin, real tmax)
 {
   const real dd = disc * (bh * bh + disc);
-  if (!(cScale > 8.0f * fabs(c) || dScale * dScale > 64.0f * dd)) return 0;
-  if (dScale * dScale > 0x1.0p36f * dd) return 1;
-  const real slack = 0.25f * fmax(fabs(t0), fabs(t1)) + 0x1.0p-18f * cScale / fabs(q);
-  return t1 + slack >= tmin && t0 - slack <= tmax;
+  const real ds2 = dScale * dScale;
+  if (!(cScale > 8.0f * fabs(c) || ds2 > 64.0f * dd)) return 0;
+  if (ds2 > 0x1.0p36f * dd || !(disc > (real)0.0f)) return 1;
+  const real af = a * ff;
+  const real eq = 0x1.0p-20f * ((sqrt(af * cc) + dScale) / sqrt(disc) + sqrt(af));
+  const real rel = eq / fabs(q) + 0x1.0p-20f;
+  const real e = 0x1.0p-18f * cScale / fabs(q);
+  const real m = (real)16.0f * q * q >= a * cScale ? (real)0.0f : fmax(fabs(t0), fabs(t1));
+  const real s0 = rel * fmax(fabs(t0), m) + e, s1 = rel * fmax(fabs(t1), m) + e;
+  return (t0 + s0 >= tmin && t0 - s0 <= tmax) || (t1 + s1 >= tmin && t1 - s1 <= tmax);
 }
-/* Quadratic_NeedsDf for a cone, or o - base much longer than its radial part
+/* Sphere_NeedsDf's rule for a cone (Cone_Intersect), or o - base much longer than its radial part
  * oR (a long cone seen from beside its middle: oR carries the rounding of
- * o - base, relatively |dl| / |oR| ulps; always redone past 2^18). */
-CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real dScale, real q, real dl2, real oo, real t0,
-                         real t1, real tmin, real tmax)
+ * o - base, relatively |dl| / |oR| ulps; always redone past 2^18). Then C's
+ * error grows with |dl| too: about 22 ulps of |oR| |dl| + 8 of |k rb| |dl|,
+ * which e bounds (2^-18 = 64 ulps) with cScale's share. Each root gets its
+ * own window, a quarter of itself (q within 1/16) plus e / |q| where the
+ * other root is c / q (16 q^2 >= A cScale, Quadratic_Roots): a ray leaving
+ * the cone's surface is redone only when its near root may lie in range, not
+ * because the far root is large. Where the other root is (sq - bh) / A, it
+ * carries q's error divided by A, a quarter of the first: both windows are a
+ * quarter of the larger root, as for Sphere_NeedsDf. */
+CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real dScale, real q, real dl2, real oo, real krb,
+                         real A, real t0, real t1, real tmin, real tmax)
 {
-  if (Quadratic_NeedsDf(C, cScale, Bh, disc, dScale, q, t0, t1, tmin, tmax)) return 1;
-  if (!(dl2 > 64.0f * oo)) return 0;
-  if (dl2 > 0x1.0p36f * oo) return 1;
-  const real slack = 0.25f * fmax(fabs(t0), fabs(t1));
-  return t1 + slack >= tmin && t0 - slack <= tmax;
+  const real dd = disc * (Bh * Bh + disc);
+  if (!(cScale > 8.0f * fabs(C) || dScale * dScale > 64.0f * dd || dl2 > 64.0f * oo)) return 0;
+  if (dScale * dScale > 0x1.0p36f * dd || dl2 > 0x1.0p36f * oo) return 1;
+  const real e = 0x1.0p-18f * (cScale + sqrt(dl2) * (sqrt(oo) + fabs(krb))) / fabs(q);
+  const real m = (real)16.0f * q * q >= A * cScale ? (real)0.0f : fmax(fabs(t0), fabs(t1));
+  const real s0 = 0.25f * fmax(fabs(t0), m) + e, s1 = 0.25f * fmax(fabs(t1), m) + e;
+  return (t0 + s0 >= tmin && t0 - s0 <= tmax) || (t1 + s1 >= tmin && t1 - s1 <= tmax);
 }
 
 /* Sphere_Intersect in double-float from the exact o - c: the cold path for
- * Quadratic_NeedsDf. Returns 1 with the root in [tmin, tmax] nearest. */
+ * Sphere_NeedsDf. Returns 1 with the root in [tmin, tmax] nearest. */
 CR_COLD CR_FUNC int Sphere_IntersectDf(const real org[3], const real dir[3], const Sphere* s, real tmin, real tmax,
                                        real* tHit)
 {
@@ -441,7 +466,7 @@ CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, rea
 }
 
 /* Cone_Intersect in double-float from the exact apex - base and o - base:
- * the cold path for Quadratic_NeedsDf (a cylinder of radius 1e6 as a ground,
+ * the cold path for Cone_NeedsDf (a cylinder of radius 1e6 as a ground,
  * a cone 1e6 long seen from 100 away). Same formulas as the float test. */
 CR_COLD CR_FUNC int Cone_IntersectDf(const real org[3], const real dir[3], const Cone* cn, real tmin, real tmax,
                                      real* tHit)
@@ -552,7 +577,7 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   real q;
   Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1, &q);
 #ifndef CR_FP64
-  if (Quadratic_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, t0, t1, tmin, tmax))
+  if (Sphere_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax))
     return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
 #endif
 #endif
@@ -768,7 +793,7 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
     real q;
     Quadratic_Roots(A, Bh, C, oo + rb * rb, disc, &t0, &t1, &q);
 #ifndef CR_FP64
-    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3(dl, dl), oo, t0, t1, tmin, tmax))
+    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3(dl, dl), oo, k * rb, A, t0, t1, tmin, tmax))
       return Cone_IntersectDf(r->org, r->dir, cn, tmin, tmax, tHit);
 #endif
 #endif

@@ -106,34 +106,44 @@ CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfl
   t1 = FMax(r0, r1);
 }
 
-// Quadratic_NeedsDf of kernels/intersect.h, lane by lane: the float roots
-// may be off by more than a few ulps and may lie in [tmin, tmax].
+// Sphere_NeedsDf of kernels/intersect.h, lane by lane.
 template <int N>
-CR_SIMD_INLINE vbool<N> Quadratic_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N> bh, vfloat<N> disc,
-                                           vfloat<N> dScale, vfloat<N> q, vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin,
-                                           vfloat<N> tmax)
+CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N> bh, vfloat<N> disc,
+                                        vfloat<N> dScale, vfloat<N> q, vfloat<N> a, vfloat<N> ff, vfloat<N> cc,
+                                        vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
 {
   const vfloat<N> dd = disc * (bh * bh + disc);
   const vfloat<N> ds2 = dScale * dScale;
   const vbool<N> inaccurate = (cScale > vfloat<N>(8.0f) * Abs(c)) | (ds2 > vfloat<N>(64.0f) * dd);
   if (None(inaccurate)) return inaccurate;
-  const vfloat<N> slack = vfloat<N>(0.25f) * FMax(Abs(t0), Abs(t1)) + vfloat<N>(0x1.0p-18f) * cScale / Abs(q);
-  const vbool<N> window = (t1 + slack >= tmin) & (t0 - slack <= tmax);
-  return inaccurate & ((ds2 > vfloat<N>(0x1.0p36f) * dd) | window);
+  const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * dd) | !(disc > vfloat<N>(0.0f));
+  const vfloat<N> af = a * ff;
+  const vfloat<N> eq = vfloat<N>(0x1.0p-20f) * ((Sqrt(af * cc) + dScale) / Sqrt(disc) + Sqrt(af));
+  const vfloat<N> rel = eq / Abs(q) + vfloat<N>(0x1.0p-20f);
+  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * cScale / Abs(q);
+  const vfloat<N> m = Select(vfloat<N>(16.0f) * q * q >= a * cScale, vfloat<N>(0.0f), FMax(Abs(t0), Abs(t1)));
+  const vfloat<N> s0 = rel * FMax(Abs(t0), m) + e, s1 = rel * FMax(Abs(t1), m) + e;
+  const vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
+  return inaccurate & (always | window);
 }
 
 // Cone_NeedsDf of kernels/intersect.h, lane by lane.
 template <int N>
 CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc, vfloat<N> dScale,
-                                      vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> t0, vfloat<N> t1,
-                                      vfloat<N> tmin, vfloat<N> tmax)
+                                      vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> krb, vfloat<N> A,
+                                      vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
 {
-  const vbool<N> quad = Quadratic_NeedsDfN<N>(C, cScale, Bh, disc, dScale, q, t0, t1, tmin, tmax);
-  const vbool<N> radial = dl2 > vfloat<N>(64.0f) * oo;
-  if (None(radial)) return quad;
-  const vfloat<N> slack = vfloat<N>(0.25f) * FMax(Abs(t0), Abs(t1));
-  const vbool<N> window = (t1 + slack >= tmin) & (t0 - slack <= tmax);
-  return quad | (radial & ((dl2 > vfloat<N>(0x1.0p36f) * oo) | window));
+  const vfloat<N> dd = disc * (Bh * Bh + disc);
+  const vfloat<N> ds2 = dScale * dScale;
+  const vbool<N> inaccurate =
+      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * dd) | (dl2 > vfloat<N>(64.0f) * oo);
+  if (None(inaccurate)) return inaccurate;
+  const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * dd) | (dl2 > vfloat<N>(0x1.0p36f) * oo);
+  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * (cScale + Sqrt(dl2) * (Sqrt(oo) + Abs(krb))) / Abs(q);
+  const vfloat<N> m = Select(vfloat<N>(16.0f) * q * q >= A * cScale, vfloat<N>(0.0f), FMax(Abs(t0), Abs(t1)));
+  const vfloat<N> s0 = vfloat<N>(0.25f) * FMax(Abs(t0), m) + e, s1 = vfloat<N>(0.25f) * FMax(Abs(t1), m) + e;
+  const vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
+  return inaccurate & (always | window);
 }
 
 // The lanes of `bits` take a scalar kernel's double-float test (the cold
@@ -170,7 +180,7 @@ CR_SIMD_INLINE void Lane3(const vfloat<N> v[3], int l, float out[3])
 // Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen; a = d.d
 // (Dot3N(dir, dir), computed once per ray by the caller). Where the float
 // discriminant is within its error bound (Sphere_DiscUndecided) or the roots
-// may be off (Quadratic_NeedsDf), the lane takes the scalar kernels'
+// may be off (Sphere_NeedsDf), the lane takes the scalar kernels'
 // double-float test (Sphere_IntersectDf).
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
@@ -205,7 +215,7 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
       return vbool<N>(false);
     }
     // Undecided lanes (Sphere_DiscUndecided) and lanes whose roots may be
-    // off (Quadratic_NeedsDf) take the double-float test.
+    // off (Sphere_NeedsDf) take the double-float test.
     const vbool<N> undecided = disc * disc <= Q * (cc + vfloat<N>(0x1.0p-9f) * Q);
     miss = disc < vfloat<N>(0.0f);
     if (All(AndNot(miss, undecided))) {
@@ -215,7 +225,7 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
     vfloat<N> q;
     Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1, q);
     const vbool<N> refine =
-        undecided | AndNot(Quadratic_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, t0, t1, tmin, tmax), miss);
+        undecided | AndNot(Sphere_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax), miss);
     if (Any(refine)) {
       const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
       const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
@@ -591,7 +601,8 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
     }
     vfloat<N> q;
     Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1, q);
-    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3N<N>(dl, dl), oo, t0, t1, tmin, tmax),
+    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3N<N>(dl, dl), oo, k * rb, A, t0,
+                                    t1, tmin, tmax),
                     miss | linear | quadMiss) |
              undecided;
   }
