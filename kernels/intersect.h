@@ -318,15 +318,29 @@ CR_FUNC int Sphere_NeedsDf(real c, real cScale, real bh, real disc, real dScale,
  * because the far root is large. Where the other root is (sq - bh) / A, it
  * carries q's error divided by A, a quarter of the first: both windows are a
  * quarter of the larger root, as for Sphere_NeedsDf. */
-CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real dScale, real q, real dl2, real oo, real krb,
-                         real A, real t0, real t1, real tmin, real tmax)
+CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real ee, real xx, real q, real dl2, real oo, real k,
+                         real ds, real rb, real dRdR, real dd, real A, real t0, real t1, real tmin, real tmax)
 {
-  const real dd = disc * (Bh * Bh + disc);
-  if (!(cScale > 8.0f * fabs(C) || dScale * dScale > 64.0f * dd || dl2 > 64.0f * oo)) return 0;
-  if (dScale * dScale > 0x1.0p36f * dd || dl2 > 0x1.0p36f * oo) return 1;
-  const real e = 0x1.0p-18f * (cScale + sqrt(dl2) * (sqrt(oo) + fabs(krb))) / fabs(q);
+  const real dScale = ee + xx;
+  const real d2 = disc * (Bh * Bh + disc);
+  if (!(cScale > 8.0f * fabs(C) || dScale * dScale > 64.0f * d2 || dl2 > 64.0f * oo)) return 0;
+  if (dScale * dScale > 0x1.0p36f * d2 || dl2 > 0x1.0p36f * oo || !(disc > (real)0.0f)) return 1;
+  const real ndl = sqrt(dl2), ndR = sqrt(dRdR), nd = sqrt(dd), noR = sqrt(oo), kds = fabs(k * ds);
+  /* First-order bounds (u = 2^-24, generously): oR within 11u |dl|, dR
+   * within 6u |d|, rb within 4u |k| |dl| + 2u |rb|; so e = rb dR - k ds oR
+   * within Ee, x = oR x dR within Ex, disc = ee - xx within eDisc, Bh within
+   * eB, A within eA; q within eq, its root's share relative to |q|. */
+  const real Ee = 0x1.0p-20f * ((fabs(k) * ndl + fabs(rb)) * ndR + fabs(rb) * nd + kds * ndl);
+  const real Ex = 0x1.0p-19f * (ndl * ndR + noR * nd);
+  const real eDisc = 2.0f * (sqrt(ee) * Ee + sqrt(xx) * Ex) + 0x1.0p-21f * dScale;
+  const real eB = 0x1.0p-20f * (ndl * (ndR + fabs(k) * kds) + noR * nd + kds * fabs(rb));
+  const real eA = 0x1.0p-19f * (ndR * nd + kds * kds + fabs(k) * kds * nd);
+  const real eq = eDisc / (2.0f * sqrt(disc)) + eB;
+  const real rel = eq / fabs(q) + eA / fabs(A) + 0x1.0p-20f;
+  if (!(eDisc < 0.25f * disc && rel < 0.0625f)) return 1;
+  const real e = 0x1.0p-18f * (cScale + ndl * (noR + fabs(k * rb))) / fabs(q);
   const real m = (real)16.0f * q * q >= A * cScale ? (real)0.0f : fmax(fabs(t0), fabs(t1));
-  const real s0 = 0.25f * fmax(fabs(t0), m) + e, s1 = 0.25f * fmax(fabs(t1), m) + e;
+  const real s0 = rel * fmax(fabs(t0), m) + e, s1 = rel * fmax(fabs(t1), m) + e;
   return (t0 + s0 >= tmin && t0 - s0 <= tmax) || (t1 + s1 >= tmin && t1 - s1 <= tmax);
 }
 
@@ -802,7 +816,8 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
     real q;
     Quadratic_Roots(A, Bh, C, oo + rb * rb, disc, &t0, &t1, &q);
 #ifndef CR_FP64
-    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3(dl, dl), oo, k * rb, A, t0, t1, tmin, tmax))
+    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3(dl, dl), oo, k, ds, rb, Dot3(dR, dR),
+                     Dot3(r->dir, r->dir), A, t0, t1, tmin, tmax))
       return Cone_IntersectDf(r->org, r->dir, cn, tmin, tmax, tHit);
 #endif
 #endif

@@ -129,19 +129,32 @@ CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N>
 
 // Cone_NeedsDf of kernels/intersect.h, lane by lane.
 template <int N>
-CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc, vfloat<N> dScale,
-                                      vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> krb, vfloat<N> A,
+CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc, vfloat<N> ee,
+                                      vfloat<N> xx, vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> k,
+                                      vfloat<N> ds, vfloat<N> rb, vfloat<N> dRdR, vfloat<N> dd, vfloat<N> A,
                                       vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
 {
-  const vfloat<N> dd = disc * (Bh * Bh + disc);
+  const vfloat<N> dScale = ee + xx;
+  const vfloat<N> d2 = disc * (Bh * Bh + disc);
   const vfloat<N> ds2 = dScale * dScale;
   const vbool<N> inaccurate =
-      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * dd) | (dl2 > vfloat<N>(64.0f) * oo);
+      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * d2) | (dl2 > vfloat<N>(64.0f) * oo);
   if (None(inaccurate)) return inaccurate;
-  const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * dd) | (dl2 > vfloat<N>(0x1.0p36f) * oo);
-  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * (cScale + Sqrt(dl2) * (Sqrt(oo) + Abs(krb))) / Abs(q);
+  const vfloat<N> ndl = Sqrt(dl2), ndR = Sqrt(dRdR), nd = Sqrt(dd), noR = Sqrt(oo), kds = Abs(k * ds);
+  const vfloat<N> Ee =
+      vfloat<N>(0x1.0p-20f) * ((Abs(k) * ndl + Abs(rb)) * ndR + Abs(rb) * nd + kds * ndl);
+  const vfloat<N> Ex = vfloat<N>(0x1.0p-19f) * (ndl * ndR + noR * nd);
+  const vfloat<N> eDisc = vfloat<N>(2.0f) * (Sqrt(ee) * Ee + Sqrt(xx) * Ex) + vfloat<N>(0x1.0p-21f) * dScale;
+  const vfloat<N> eB = vfloat<N>(0x1.0p-20f) * (ndl * (ndR + Abs(k) * kds) + noR * nd + kds * Abs(rb));
+  const vfloat<N> eA = vfloat<N>(0x1.0p-19f) * (ndR * nd + kds * kds + Abs(k) * kds * nd);
+  const vfloat<N> eq = eDisc / (vfloat<N>(2.0f) * Sqrt(disc)) + eB;
+  const vfloat<N> rel = eq / Abs(q) + eA / Abs(A) + vfloat<N>(0x1.0p-20f);
+  const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * d2) | (dl2 > vfloat<N>(0x1.0p36f) * oo) |
+                          !(disc > vfloat<N>(0.0f)) |
+                          !((eDisc < vfloat<N>(0.25f) * disc) & (rel < vfloat<N>(0.0625f)));
+  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * (cScale + ndl * (noR + Abs(k * rb))) / Abs(q);
   const vfloat<N> m = Select(vfloat<N>(16.0f) * q * q >= A * cScale, vfloat<N>(0.0f), FMax(Abs(t0), Abs(t1)));
-  const vfloat<N> s0 = vfloat<N>(0.25f) * FMax(Abs(t0), m) + e, s1 = vfloat<N>(0.25f) * FMax(Abs(t1), m) + e;
+  const vfloat<N> s0 = rel * FMax(Abs(t0), m) + e, s1 = rel * FMax(Abs(t1), m) + e;
   const vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
   return inaccurate & (always | window);
 }
@@ -622,8 +635,8 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
     }
     vfloat<N> q;
     Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1, q);
-    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee + xx, q, Dot3N<N>(dl, dl), oo, k * rb, A, t0,
-                                    t1, tmin, tmax),
+    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3N<N>(dl, dl), oo, k, ds, rb,
+                                    Dot3N<N>(dR, dR), Dot3N<N>(dir, dir), A, t0, t1, tmin, tmax),
                     miss | linear | quadMiss) |
              undecided;
   }
