@@ -312,12 +312,12 @@ CR_FUNC int Sphere_NeedsDf(real c, real cScale, real bh, real disc, real dScale,
  * o - base, relatively |dl| / |oR| ulps; always redone past 2^18). Then C's
  * error grows with |dl| too: about 22 ulps of |oR| |dl| + 8 of |k rb| |dl|,
  * which e bounds (2^-18 = 64 ulps) with cScale's share. Each root gets its
- * own window, a quarter of itself (q within 1/16) plus e / |q| where the
- * other root is c / q (16 q^2 >= A cScale, Quadratic_Roots): a ray leaving
- * the cone's surface is redone only when its near root may lie in range, not
- * because the far root is large. Where the other root is (sq - bh) / A, it
- * carries q's error divided by A, a quarter of the first: both windows are a
- * quarter of the larger root, as for Sphere_NeedsDf. */
+ * own window, rel of itself plus e / |q|, rel bounding q's and A's relative
+ * errors (below; always redone past 1/16): a ray leaving the cone's surface
+ * is redone only when its near root may lie in range, not because the far
+ * root is large. Where the other root is (sq - bh) / A, it carries q's error
+ * divided by A: both windows then take the larger root's share, as for
+ * Sphere_NeedsDf. */
 CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real ee, real xx, real q, real dl2, real oo, real k,
                          real ds, real rb, real dRdR, real dd, real A, real t0, real t1, real tmin, real tmax)
 {
