@@ -1,10 +1,10 @@
-#include "micro_common.h"
+#include "bench/micro_common.h"
 
 #include <cmath>
 #include <map>
 #include <mutex>
 
-#include "scene/generate.h"
+#include "host/scene/generate.h"
 
 namespace cr::micro {
 

@@ -11,10 +11,10 @@
 #include <benchmark/benchmark.h>
 
 #include "kernels/types.h"
-#include "rays/raygen.h"
-#include "reference/reference.h"
-#include "scene/scene.h"
-#include "trace/tracer.h"
+#include "host/rays/raygen.h"
+#include "host/reference/reference.h"
+#include "host/scene/scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr::micro {
 

@@ -13,7 +13,7 @@
 #include <benchmark/benchmark.h>
 
 #include "kernels/types.h"
-#include "micro_common.h"
+#include "bench/micro_common.h"
 
 namespace cr::micro_robust {
 typedef float real;

@@ -12,7 +12,7 @@
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 
-#include "micro_common.h"
+#include "bench/micro_common.h"
 #include "simd/probe_scene.h"
 #include "simd/isa.h"
 #include "simd/simd_kernels.h"

@@ -15,10 +15,10 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "accel/accel.h"
-#include "cl/cl_context.h"
-#include "micro_common.h"
-#include "reference/check.h"
+#include "host/accel/accel.h"
+#include "host/cl/cl_context.h"
+#include "bench/micro_common.h"
+#include "host/reference/check.h"
 
 namespace cr::micro {
 
@@ -101,7 +101,7 @@ int RegisterAll()
   for (const char* scene : {"flake", "mesh"})
     for (RayKind kind : {RayKind::Primary, RayKind::Diffuse})
       for (Backend b : backends)
-        for (AccelKind a : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH})
+        for (AccelKind a : kAccelKinds)
           benchmark::RegisterBenchmark(
               fmt::format("BM_TraversalStep/{}/{}/{}/{}", BackendName(b), AccelKindName(a), scene, RayKindName(kind))
                   .c_str(),
@@ -109,7 +109,7 @@ int RegisterAll()
               ->Unit(benchmark::kMillisecond)
               ->UseRealTime();
   for (const char* scene : {"flake", "mesh"})
-    for (AccelKind a : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH})
+    for (AccelKind a : kAccelKinds)
       benchmark::RegisterBenchmark(fmt::format("BM_Build/{}/{}", AccelKindName(a), scene).c_str(), BM_Build, a,
                                    std::string(scene))
           ->Unit(benchmark::kMillisecond)

@@ -29,9 +29,7 @@ typedef struct {
   CR_GLOBAL const Sphere* spheres;
   CR_GLOBAL const Triangle* triangles;
   CR_GLOBAL const Cone* cones;
-  uint nSpheres;
-  uint nTriangles;
-  uint nCones;
+  PrimRanges ranges;
 } PrimView;
 
 /* Roots of a t^2 + 2 bh t + c = 0 given disc = bh^2 - a c >= 0, smaller first
@@ -543,7 +541,7 @@ CR_COLD CR_FUNC int Cone_IntersectDf(const real org[3], const real dir[3], const
 CR_FUNC int Hit_CloserOn(const PrimView* pv, const Ray* r, real t, uint g, const Hit* h)
 {
 #if CR_HAS_SPHERES && !defined(CR_FAST) && !defined(CR_FP64)
-  if (t == h->t && g != h->g && g < pv->nSpheres && h->g < pv->nSpheres) {
+  if (t == h->t && g != h->g && Prim_Is(&pv->ranges, CR_PRIM_SPHERE, g) && Prim_Is(&pv->ranges, CR_PRIM_SPHERE, h->g)) {
     const Sphere a = pv->spheres[g];
     const Sphere b = pv->spheres[h->g];
     const int order = Sphere_TieOrder(r->org, r->dir, r->tmin, &a, &b);
@@ -846,20 +844,21 @@ CR_FUNC_HOT int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hi
   real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
   int found = 0;
 #if CR_HAS_SPHERES
-  if (g < pv->nSpheres) {
-    const Sphere s = pv->spheres[g];
+  /* In type order: each test below knows g is past the types above. */
+  if (g < Prim_End(&pv->ranges, CR_PRIM_SPHERE)) {
+    const Sphere s = pv->spheres[Prim_Local(&pv->ranges, CR_PRIM_SPHERE, g)];
     found = Sphere_Intersect(r, &s, r->tmin, hit->t, &t);
   } else
 #endif
 #if CR_HAS_TRIANGLES
-      if (g < pv->nSpheres + pv->nTriangles) {
-    const Triangle tri = pv->triangles[g - pv->nSpheres];
+      if (g < Prim_End(&pv->ranges, CR_PRIM_TRIANGLE)) {
+    const Triangle tri = pv->triangles[Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, g)];
     found = Triangle_Intersect(r, &tri, r->tmin, hit->t, &t, &u, &v);
   } else
 #endif
   {
 #if CR_HAS_CONES
-    const Cone cn = pv->cones[g - pv->nSpheres - pv->nTriangles];
+    const Cone cn = pv->cones[Prim_Local(&pv->ranges, CR_PRIM_CONE, g)];
     found = Cone_Intersect(r, &cn, r->tmin, hit->t, &t);
 #endif
   }
@@ -952,8 +951,8 @@ CR_FUNC HitRecord Hit_ToRecord(const Hit* h, const PrimView* pv, CR_GLOBAL const
   }
   r.prim = unified ? h->g : primIds[h->g];
   r.t = anyHit ? 0.0f : (float)h->t;
-  if (!anyHit && h->g >= pv->nSpheres && h->g < pv->nSpheres + pv->nTriangles &&
-      (unified || (pv->triangles[h->g - pv->nSpheres].flags & CR_TRI_REPORT_UV))) {
+  if (!anyHit && Prim_Is(&pv->ranges, CR_PRIM_TRIANGLE, h->g) &&
+      (unified || (pv->triangles[Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, h->g)].flags & CR_TRI_REPORT_UV))) {
     r.u = (float)h->u;
     r.v = (float)h->v;
   }

@@ -143,20 +143,20 @@ CR_FUNC int Packet_PrimTest(const PrimView* pv, uint g, const Ray* ray, const Hi
   *u = (real)0.0f;
   *v = (real)0.0f;
 #if CR_HAS_SPHERES
-  if (g < pv->nSpheres) {
-    const Sphere prim = Packet_LoadSphere(pv->spheres + g);
+  if (Prim_Is(&pv->ranges, CR_PRIM_SPHERE, g)) {
+    const Sphere prim = Packet_LoadSphere(pv->spheres + Prim_Local(&pv->ranges, CR_PRIM_SPHERE, g));
     found = Sphere_Intersect(ray, &prim, ray->tmin, hit->t, t);
   }
 #endif
 #if CR_HAS_TRIANGLES
-  if (g >= pv->nSpheres && g < pv->nSpheres + pv->nTriangles) {
-    const Triangle prim = Packet_LoadTriangle(pv->triangles + (g - pv->nSpheres));
+  if (Prim_Is(&pv->ranges, CR_PRIM_TRIANGLE, g)) {
+    const Triangle prim = Packet_LoadTriangle(pv->triangles + Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, g));
     found = Triangle_Intersect(ray, &prim, ray->tmin, hit->t, t, u, v);
   }
 #endif
 #if CR_HAS_CONES
-  if (g >= pv->nSpheres + pv->nTriangles) {
-    const Cone prim = Packet_LoadCone(pv->cones + (g - pv->nSpheres - pv->nTriangles));
+  if (Prim_Is(&pv->ranges, CR_PRIM_CONE, g)) {
+    const Cone prim = Packet_LoadCone(pv->cones + Prim_Local(&pv->ranges, CR_PRIM_CONE, g));
     found = Cone_Intersect(ray, &prim, ray->tmin, hit->t, t);
   }
 #endif

@@ -107,9 +107,10 @@ CR_FUNC PrimView Trace_PrimView(CR_GLOBAL const Sphere* spheres, CR_GLOBAL const
   pv.spheres = spheres;
   pv.triangles = triangles;
   pv.cones = cones;
-  pv.nSpheres = nSpheres;
-  pv.nTriangles = nTriangles;
-  pv.nCones = nCones;
+  pv.ranges.begin[CR_PRIM_SPHERE] = 0u;
+  pv.ranges.begin[CR_PRIM_TRIANGLE] = nSpheres;
+  pv.ranges.begin[CR_PRIM_CONE] = nSpheres + nTriangles;
+  pv.ranges.begin[CR_NUM_PRIM_TYPES] = nSpheres + nTriangles + nCones;
   return pv;
 }
 

@@ -3,10 +3,12 @@
  * size and offsets, so host and device cannot drift apart.
  *
  * Unified primitive index g: the device stores one array per primitive type and
- * numbers them back to back: spheres [0, nSpheres), triangles [nSpheres,
- * nSpheres + nTriangles), cones after that. References in leaves and cells are
- * such indices, sorted ascending inside each leaf or cell, so they come grouped
- * by type. primIds[g] is the scene-file primitive id of ../shared/FORMATS.md.
+ * numbers them back to back in type order (CR_PRIM_SPHERE, CR_PRIM_TRIANGLE,
+ * CR_PRIM_CONE): type k holds [begin[k], begin[k + 1]) of PrimRanges, and
+ * nothing else computes these offsets (Prim_TypeOf, Prim_Local). References
+ * in leaves and cells are such indices, sorted ascending inside each leaf or
+ * cell, so they come grouped by type. primIds[g] is the scene-file primitive
+ * id of ../shared/FORMATS.md.
  */
 #ifndef CELLRAY_KERNELS_TYPES_H
 #define CELLRAY_KERNELS_TYPES_H
@@ -69,13 +71,32 @@ typedef struct {
   float apexRadius;
 } Cone;
 
-/* Counts that turn a unified index into (type, index). 16 bytes. */
+/* Primitive types in unified-index order. A new type goes last, so that the
+ * primitives of existing scenes keep their g (ties go to the lower g). */
+#define CR_PRIM_SPHERE 0u
+#define CR_PRIM_TRIANGLE 1u
+#define CR_PRIM_CONE 2u
+#define CR_NUM_PRIM_TYPES 3u
+
+/* Where each type's unified indices begin: type k holds [begin[k],
+ * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives.
+ * 16 bytes. */
 typedef struct {
-  uint nSpheres;
-  uint nTriangles;
-  uint nCones;
-  uint pad;
-} PrimCounts;
+  uint begin[CR_NUM_PRIM_TYPES + 1u];
+} PrimRanges;
+
+/* The type of unified index g (g below the total). */
+CR_FUNC uint Prim_TypeOf(const PrimRanges* r, uint g)
+{
+  uint k = 0u;
+  while (k + 1u < CR_NUM_PRIM_TYPES && g >= r->begin[k + 1u]) ++k;
+  return k;
+}
+/* Whether g is of type k, and its index in that type's array. */
+CR_FUNC int Prim_Is(const PrimRanges* r, uint k, uint g) { return g >= r->begin[k] && g < r->begin[k + 1u]; }
+CR_FUNC uint Prim_Local(const PrimRanges* r, uint k, uint g) { return g - r->begin[k]; }
+CR_FUNC uint Prim_End(const PrimRanges* r, uint k) { return r->begin[k + 1u]; }
+CR_FUNC uint Prim_Count(const PrimRanges* r, uint k) { return r->begin[k + 1u] - r->begin[k]; }
 
 /* BVH node, 32 bytes (pbrt's LinearBVHNode shape). count == 0: interior node
  * whose children are nodes `first` and `first + 1`; count > 0: leaf holding
@@ -136,7 +157,7 @@ static_assert(sizeof(HitRecord) == 16 && offsetof(HitRecord, prim) == 4 && offse
 static_assert(sizeof(Sphere) == 16);
 static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
 static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
-static_assert(sizeof(PrimCounts) == 16);
+static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);
 static_assert(sizeof(GridHeader) == 64 && offsetof(GridHeader, res) == 48);
 static_assert(sizeof(OctreeNode) == 16);

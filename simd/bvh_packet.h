@@ -134,13 +134,13 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
 {
   vfloat<N> t, u(0.0f), v(0.0f);
   vbool<N> ok;
-  const PrimCounts& c = sc.counts;
+  const PrimRanges& c = sc.ranges;
   if constexpr (kType == PrimType::Sphere) {
     const Sphere& sp = sc.spheres[g];
     const vfloat<N> cen[3] = {vfloat<N>(sp.center[0]), vfloat<N>(sp.center[1]), vfloat<N>(sp.center[2])};
     ok = Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, P.dd, vfloat<N>(sp.radius), P.tmin, H.t, t);
   } else if constexpr (kType == PrimType::Triangle) {
-    const Triangle& tri = sc.triangles[g - c.nSpheres];
+    const Triangle& tri = sc.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
     if constexpr (kFast) {
       vfloat<N> v0[3], v1[3], v2[3];
       for (int i = 0; i < 3; ++i) {
@@ -169,13 +169,13 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
       ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>{tri}, P.org, P.dir, P.tmin, H.t, t, u, v);
     }
   } else {
-    const ConeData& cd = sc.cones[g - c.nSpheres - c.nTriangles];
+    const ConeData& cd = sc.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
     vfloat<N> dl[3], w[3];
     for (int i = 0; i < 3; ++i) {
       dl[i] = P.org[i] - vfloat<N>(cd.base[i]);
       w[i] = vfloat<N>(cd.w[i]);
     }
-    const Cone* cone = &sc.coneGeometry[g - c.nSpheres - c.nTriangles];
+    const Cone* cone = &sc.coneGeometry[Prim_Local(&c, CR_PRIM_CONE, g)];
     ok = Cone_IntersectN<kFast, N>(P.org, dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin,
                                    H.t, t, [cone](int) { return cone; });
   }
@@ -189,7 +189,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
   if (Any(tied)) [[unlikely]] {
     closer = closer | (tied & LessUnsigned(gv, H.g));
     if constexpr (kType == PrimType::Sphere && !kFast) {
-      const vbool<N> tie = tied & LessUnsigned(H.g, vint<N>(static_cast<int>(c.nSpheres))) & !(gv == H.g);
+      const vbool<N> tie = tied & LessUnsigned(H.g, vint<N>(static_cast<int>(Prim_End(&c, CR_PRIM_SPHERE)))) & !(gv == H.g);
       unsigned bits = closer.Bits();
       for (unsigned rest = tie.Bits(); rest; rest &= rest - 1u) {
         const int l = LowestBit(rest);
@@ -214,7 +214,7 @@ template <int N, unsigned kTypes, bool kFast>
 CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                              HitPacket<N>& H, vbool<N> m)
 {
-  switch (TypeOf<kTypes>(g, sc.counts)) {
+  switch (TypeOf<kTypes>(g, sc.ranges)) {
     case PrimType::Sphere: return PacketPrim_IntersectAs<N, PrimType::Sphere, kFast>(sc, g, P, H, m);
     case PrimType::Triangle: return PacketPrim_IntersectAs<N, PrimType::Triangle, kFast>(sc, g, P, H, m);
     case PrimType::Cone: break;
@@ -225,7 +225,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
-                                    int anyHit, StatsSum& st)
+                                    int anyHit, TraceStatsSum& st)
 {
   struct Entry {
     vfloat<N> t;  // each lane's entry distance
@@ -370,7 +370,7 @@ template <int N, bool kStats, class TraceFn>
 CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
-  StatsSum st;
+  TraceStatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];
     std::uint32_t idx[N];
@@ -381,7 +381,7 @@ CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob
     trace(P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
     Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }
-  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+  if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 
 // Traces positions [job.begin, job.end) in packets of N.
@@ -389,7 +389,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
-                                                StatsSum& st) {
+                                                TraceStatsSum& st) {
     BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
   });
 }

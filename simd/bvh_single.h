@@ -78,7 +78,7 @@ CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K>
     }
   const std::uint32_t gl = g[lane];
   bool closer;
-  if (tieScene && best == hit.t && gl != hit.g && hit.g < tieScene->counts.nSpheres) {
+  if (tieScene && best == hit.t && gl != hit.g && hit.g < Prim_End(&tieScene->ranges, CR_PRIM_SPHERE)) {
     const int order = Pack_SphereTieOrder<K>(*tieScene, *tieRay, gl, hit.g);
     closer = order != 0 ? order < 0 : gl < hit.g;
   } else {
@@ -102,7 +102,7 @@ CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
 // (occlusion: as soon as it does).
 template <int K, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
-                                       int anyHit, StatsSum& st)
+                                       int anyHit, TraceStatsSum& st)
 {
   bool changed = false;
   if constexpr (kTypes & kSphereBit) {
@@ -168,7 +168,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
           valid & Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
                                             vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t, [&](int l) {
                                               return valid.Bits() >> l & 1u
-                                                         ? &sc.coneGeometry[pk.g[l] - sc.counts.nSpheres - sc.counts.nTriangles]
+                                                         ? &sc.coneGeometry[Prim_Local(&sc.ranges, CR_PRIM_CONE, pk.g[l])]
                                                          : nullptr;
                                             });
       if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
@@ -182,7 +182,7 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
 
 // Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
+CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   struct Entry {
     std::uint32_t ref;
@@ -302,7 +302,7 @@ template <int N, bool kStats, class TraceFn>
 CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
-  StatsSum st;
+  TraceStatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];
     std::uint32_t idx[N];
@@ -319,14 +319,14 @@ CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }
   }
-  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+  if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 
 // Traces positions [job.begin, job.end) one ray at a time.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
 void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, StatsSum& st) {
+  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
     BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
   });
 }

@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr::simd {
 
@@ -58,12 +58,12 @@ struct Collapser {
 
   std::uint32_t Leaf(const BVHNode& b)
   {
-    const PrimCounts c = scene.Counts();
+    const PrimRanges c = scene.Ranges();
     const std::uint32_t* refs = bvh.refs.data() + b.first;
     // Refs of a leaf are sorted, so each type is one run.
     std::uint32_t nS = 0, nT = 0;
-    while (nS < b.count && refs[nS] < c.nSpheres) ++nS;
-    while (nS + nT < b.count && refs[nS + nT] < c.nSpheres + c.nTriangles) ++nT;
+    while (nS < b.count && refs[nS] < Prim_End(&c, CR_PRIM_SPHERE)) ++nS;
+    while (nS + nT < b.count && refs[nS + nT] < Prim_End(&c, CR_PRIM_TRIANGLE)) ++nT;
     const std::uint32_t nC = b.count - nS - nT;
     auto packCount = [](std::uint32_t n) {
       const std::uint32_t p = (n + K - 1) / K;
@@ -80,7 +80,7 @@ struct Collapser {
       p.radius[l] = s.radius;
     });
     leaf.first[1] = Packs(out.triangles, refs + nS, nT, [&](TrianglePack<K>& p, int l, std::uint32_t g) {
-      const Triangle& t = scene.triangles[g - c.nSpheres];
+      const Triangle& t = scene.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
       for (int a = 0; a < 3; ++a) {
         p.v[0][a][l] = t.v0[a];
         p.v[1][a][l] = t.v1[a];
@@ -89,7 +89,7 @@ struct Collapser {
       p.flags[l] = t.flags;
     });
     leaf.first[2] = Packs(out.cones, refs + nS + nT, nC, [&](ConePack<K>& p, int l, std::uint32_t g) {
-      const ConeData& d = cones[g - c.nSpheres - c.nTriangles];
+      const ConeData& d = cones[Prim_Local(&c, CR_PRIM_CONE, g)];
       for (int a = 0; a < 3; ++a) {
         p.base[a][l] = d.base[a];
         p.w[a][l] = d.w[a];

@@ -6,8 +6,8 @@
 #include <memory>
 #include <vector>
 
-#include "accel/accel.h"
-#include "scene/scene.h"
+#include "host/accel/accel.h"
+#include "host/scene/scene.h"
 #include "simd/bvh_wide.h"
 #include "simd/simd_kernels.h"
 

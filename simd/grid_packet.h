@@ -31,7 +31,7 @@ namespace cr::simd::CR_SIMD_NS {
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
-                                     int anyHit, StatsSum& st)
+                                     int anyHit, TraceStatsSum& st)
 {
   const GridHeader& g = *sc.grid;
   if (g.nRefs == 0u) return;
@@ -131,7 +131,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 void GridPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
-                                                StatsSum& st) {
+                                                TraceStatsSum& st) {
     GridPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
   });
 }

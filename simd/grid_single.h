@@ -20,7 +20,7 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   const PrimView pv = MakePrimView(sc);
   const GridHeader& g = *sc.grid;
-  StatsSum st;
+  TraceStatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];
     std::uint32_t idx[N];
@@ -46,7 +46,7 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }
   }
-  if constexpr (kStats) AddStats(job.stats, st, job.end - job.begin);
+  if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

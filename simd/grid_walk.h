@@ -78,7 +78,7 @@ CR_SIMD_INLINE vbool<N> GridPacket_Enter(const GridHeader& g, const RayPacket<N>
 // recomputed values, bit for bit.
 template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], int anyHit,
-                                    StatsSum& st)
+                                    TraceStatsSum& st)
 {
   const GridHeader& g = *sc.grid;
   PackRay<4> pr;

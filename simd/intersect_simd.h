@@ -5,7 +5,7 @@
 // either N rays against one primitive (packets: the primitive broadcast) or
 // one ray against N primitives (single-ray packs: the ray broadcast); the
 // functions do not care which. kFast selects the CR_FAST algorithms.
-// Included by simd/kernel_instance.inc inside the ISA namespace.
+// Included by simd/kernel_common.h, after the ISA namespace is set (simd/vec.h).
 #pragma once
 
 #include "simd/vec.h"

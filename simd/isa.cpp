@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr::simd {
 

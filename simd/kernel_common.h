@@ -1,7 +1,7 @@
 // What every per-ISA kernel unit includes first: the wrappers, the scalar
 // ray and hit code of kernels/ (Ray, Hit, Hit_Init, Hit_Closer, Hit_ToRecord)
-// compiled inside the ISA namespace, and the lane-wise intersectors. Define
-// CR_SIMD_NS before including. (Ray_Init itself is replaced by the
+// compiled inside the ISA namespace (CR_SIMD_NS, from the unit's flags:
+// simd/vec.h), and the lane-wise intersectors. (Ray_Init itself is replaced by the
 // vectorised RayPacket_Init, which also keeps libstdc++'s out-of-line
 // std::fabs of a -O0 build out of these units.)
 #pragma once
@@ -29,16 +29,16 @@ inline constexpr int kBVHStack = 64;
 // with one type never branches.
 enum class PrimType { Sphere, Triangle, Cone };
 template <unsigned kTypes>
-inline PrimType TypeOf(std::uint32_t g, const PrimCounts& c)
+inline PrimType TypeOf(std::uint32_t g, const PrimRanges& c)
 {
   constexpr bool hasS = kTypes & kSphereBit, hasT = kTypes & kTriangleBit, hasC = kTypes & kConeBit;
   if constexpr (hasS) {
     if constexpr (!hasT && !hasC) return PrimType::Sphere;
-    if (g < c.nSpheres) return PrimType::Sphere;
+    if (g < Prim_End(&c, CR_PRIM_SPHERE)) return PrimType::Sphere;
   }
   if constexpr (hasT) {
     if constexpr (!hasC) return PrimType::Triangle;
-    if (g < c.nSpheres + c.nTriangles) return PrimType::Triangle;
+    if (g < Prim_End(&c, CR_PRIM_TRIANGLE)) return PrimType::Triangle;
   }
   return PrimType::Cone;
 }
@@ -49,25 +49,16 @@ inline PrimView MakePrimView(const KernelScene& sc)
   pv.spheres = sc.spheres;
   pv.triangles = sc.triangles;
   pv.cones = nullptr;  // Hit_ToRecord reads triangles only
-  pv.nSpheres = sc.counts.nSpheres;
-  pv.nTriangles = sc.counts.nTriangles;
-  pv.nCones = sc.counts.nCones;
+  pv.ranges = sc.ranges;
   return pv;
 }
 
-// Per-batch sums of the per-ray measures.
-struct StatsSum {
-  std::uint64_t nIT = 0, nTS = 0, nLeaves = 0, nEmptyLeaves = 0;
-};
-
-inline void AddStats(KernelStats* out, const StatsSum& s, std::size_t rays)
+// A kernel's sums (host/trace/stats.h) into the job's, with its ray count.
+inline void AddJobStats(TraceStatsSum* out, TraceStatsSum s, std::size_t rays)
 {
   if (!out) return;
-  out->rays += rays;
-  out->nIT += s.nIT;
-  out->nTS += s.nTS;
-  out->nLeaves += s.nLeaves;
-  out->nEmptyLeaves += s.nEmptyLeaves;
+  s.rays = rays;
+  AddStats(*out, s);
 }
 
 // Ray_PlaneT of kernels/ray.h: (p - org) * inv, and 0 where that is NaN (a

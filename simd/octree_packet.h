@@ -87,7 +87,7 @@ CR_SIMD_INLINE void OctreeFrame_Advance(OctreeFrame<N>& F, unsigned lanes)
 // or before the leaf's exit cx).
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNode& n, const RayPacket<N>& P,
-                                          HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit, StatsSum& st)
+                                          HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit, TraceStatsSum& st)
 {
   if constexpr (kStats) {
     st.nLeaves += PopCount(lanes);
@@ -102,7 +102,7 @@ CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNod
 // The lanes of `lanes`, whose directions all have the sign bits signMask.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
-                                            unsigned lanes, unsigned signMask, int anyHit, StatsSum& st)
+                                            unsigned lanes, unsigned signMask, int anyHit, TraceStatsSum& st)
 {
   const OctreeHeader& hdr = *sc.octree;
   const OctreeNode* nodes = sc.octreeNodes;
@@ -210,7 +210,7 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
 // class of direction signs among them.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreePacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
-                                       int anyHit, StatsSum& st)
+                                       int anyHit, TraceStatsSum& st)
 {
   const unsigned neg[3] = {P.invNeg[0].Bits(), P.invNeg[1].Bits(), P.invNeg[2].Bits()};
   for (unsigned rest = active.Bits(); rest;) {
@@ -228,7 +228,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 void OctreePacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
-                                                StatsSum& st) {
+                                                TraceStatsSum& st) {
     OctreePacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
   });
 }

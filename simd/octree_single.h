@@ -23,7 +23,7 @@ CR_SIMD_INLINE float FMinS(float a, float b) { return a < b ? a : b; }
 
 // Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
 template <unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, StatsSum& st)
+CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   const OctreeHeader& hdr = *sc.octree;
   const OctreeNode* nodes = sc.octreeNodes;
@@ -144,7 +144,7 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void OctreeSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, StatsSum& st) {
+  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
     OctreeSingle_Trace<kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
   });
 }

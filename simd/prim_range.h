@@ -27,16 +27,16 @@ namespace cr::simd::CR_SIMD_NS {
 // End of the run of type kType that starts at refs[i] (i <= end).
 template <unsigned kTypes, PrimType kType>
 CR_SIMD_INLINE std::uint32_t Refs_RunEnd(const std::uint32_t* refs, std::uint32_t i, std::uint32_t end,
-                                         const PrimCounts& c)
+                                         const PrimRanges& c)
 {
   constexpr bool hasT = kTypes & kTriangleBit, hasC = kTypes & kConeBit;
   std::uint32_t bound;
   if constexpr (kType == PrimType::Sphere) {
     if constexpr (!hasT && !hasC) return end;
-    bound = c.nSpheres;
+    bound = Prim_End(&c, CR_PRIM_SPHERE);
   } else if constexpr (kType == PrimType::Triangle) {
     if constexpr (!hasC) return end;
-    bound = c.nSpheres + c.nTriangles;
+    bound = Prim_End(&c, CR_PRIM_TRIANGLE);
   } else {
     return end;
   }
@@ -49,7 +49,7 @@ CR_SIMD_INLINE std::uint32_t Refs_RunEnd(const std::uint32_t* refs, std::uint32_
 template <int N, PrimType kType, bool kFast, bool kStats>
 CR_SIMD_INLINE void PacketRun_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t i,
                                         std::uint32_t e, const RayPacket<N>& P, HitPacket<N>& H, vbool<N>& m,
-                                        int anyHit, unsigned& done, StatsSum& st)
+                                        int anyHit, unsigned& done, TraceStatsSum& st)
 {
   for (; i < e; ++i) {
     if constexpr (kStats) st.nIT += PopCount(m.Bits());
@@ -69,16 +69,16 @@ CR_SIMD_INLINE void PacketRun_Intersect(const KernelScene& sc, const std::uint32
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void PacketRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
                                          std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
-                                         int anyHit, unsigned& done, StatsSum& st)
+                                         int anyHit, unsigned& done, TraceStatsSum& st)
 {
   std::uint32_t i = begin;
   if constexpr (kTypes & kSphereBit) {
-    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Sphere>(refs, i, end, sc.counts);
+    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Sphere>(refs, i, end, sc.ranges);
     PacketRun_Intersect<N, PrimType::Sphere, kFast, kStats>(sc, refs, i, e, P, H, m, anyHit, done, st);
     i = e;
   }
   if constexpr (kTypes & kTriangleBit) {
-    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Triangle>(refs, i, end, sc.counts);
+    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Triangle>(refs, i, end, sc.ranges);
     if (i < e && Any(m)) PacketRun_Intersect<N, PrimType::Triangle, kFast, kStats>(sc, refs, i, e, P, H, m, anyHit, done, st);
     i = e;
   }
@@ -91,10 +91,10 @@ CR_SIMD_INLINE void PacketRefs_Intersect(const KernelScene& sc, const std::uint3
 // time. Returns true when the hit changed (occlusion: at the first change).
 template <unsigned kTypes, PrimType kType, bool kFast, bool kStats>
 CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t i,
-                                     std::uint32_t e, const PackRay<4>& pr, Hit& hit, int anyHit, StatsSum& st)
+                                     std::uint32_t e, const PackRay<4>& pr, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   constexpr int K = 4;
-  const PrimCounts& c = sc.counts;
+  const PrimRanges& c = sc.ranges;
   bool changed = false;
   for (; i < e; i += K) {
     const std::uint32_t count = e - i < std::uint32_t(K) ? e - i : std::uint32_t(K);
@@ -113,7 +113,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
     } else if constexpr (kType == PrimType::Triangle) {
       // Each vertex is a 16-byte row (x, y, z, flags or pad).
       const Triangle* tri[K];
-      for (int l = 0; l < K; ++l) tri[l] = &sc.triangles[g[l] - c.nSpheres];
+      for (int l = 0; l < K; ++l) tri[l] = &sc.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g[l])];
       const float* rows[K];
       vfloat<K> vtx[3][4];  // [vertex][axis]
       for (int l = 0; l < K; ++l) rows[l] = tri[l]->v0;
@@ -137,7 +137,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
     } else {
       // ConeData rows: (base, H), (w, r0), (k, pad).
       const ConeData* cd[K];
-      for (int l = 0; l < K; ++l) cd[l] = &sc.cones[g[l] - c.nSpheres - c.nTriangles];
+      for (int l = 0; l < K; ++l) cd[l] = &sc.cones[Prim_Local(&c, CR_PRIM_CONE, g[l])];
       const float* rows[K];
       vfloat<K> r0[4], r1[4], r2[4];
       for (int l = 0; l < K; ++l) rows[l] = cd[l]->base;
@@ -149,7 +149,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       vfloat<K> dl[3];
       for (int a = 0; a < 3; ++a) dl[a] = pr.org[a] - r0[a];
       ok = Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, r1, r0[3], r1[3], r2[0], pr.tmin, vfloat<K>(hit.t), t,
-                                     [&](int l) { return &sc.coneGeometry[g[l] - c.nSpheres - c.nTriangles]; });
+                                     [&](int l) { return &sc.coneGeometry[Prim_Local(&c, CR_PRIM_CONE, g[l])]; });
     }
     if (anyHit) {
       // The first occluder in reference order, as the scalar loop finds it
@@ -175,12 +175,12 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
 // changed (occlusion: as soon as it does).
 template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
-                                      std::uint32_t end, const PackRay<4>& pr, Hit& hit, int anyHit, StatsSum& st)
+                                      std::uint32_t end, const PackRay<4>& pr, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   bool changed = false;
   std::uint32_t i = begin;
   if constexpr (kTypes & kSphereBit) {
-    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Sphere>(refs, i, end, sc.counts);
+    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Sphere>(refs, i, end, sc.ranges);
     if (RayRun_Intersect<kTypes, PrimType::Sphere, kFast, kStats>(sc, refs, i, e, pr, hit, anyHit, st)) {
       if (anyHit) return true;
       changed = true;
@@ -188,7 +188,7 @@ CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t
     i = e;
   }
   if constexpr (kTypes & kTriangleBit) {
-    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Triangle>(refs, i, end, sc.counts);
+    const std::uint32_t e = Refs_RunEnd<kTypes, PrimType::Triangle>(refs, i, end, sc.ranges);
     if (RayRun_Intersect<kTypes, PrimType::Triangle, kFast, kStats>(sc, refs, i, e, pr, hit, anyHit, st)) {
       if (anyHit) return true;
       changed = true;
@@ -209,7 +209,7 @@ CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
                                        std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
-                                       int anyHit, unsigned& done, StatsSum& st)
+                                       int anyHit, unsigned& done, TraceStatsSum& st)
 {
   for (unsigned bits = m.Bits(); bits; bits &= bits - 1u) {
     const int l = LowestBit(bits);
@@ -248,7 +248,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void CellRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
                                        std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
-                                       int anyHit, unsigned& done, StatsSum& st)
+                                       int anyHit, unsigned& done, TraceStatsSum& st)
 {
   constexpr bool kLanePasses = !(kTypes & kSphereBit);
   if (kLanePasses && PopCount(m.Bits()) <= 2 && end - begin >= 4)

@@ -8,7 +8,7 @@
 #include <numeric>
 #include <vector>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 #include "simd/bvh_wide_builder.h"
 #include "simd/simd_kernels.h"
 
@@ -29,7 +29,7 @@ struct ProbeScene {
     sc.triangles = scene.triangles.data();
     sc.cones = cones.data();
     sc.coneGeometry = scene.cones.data();
-    sc.counts = scene.Counts();
+    sc.ranges = scene.Ranges();
     sc.primIds = ids.data();
   }
 };

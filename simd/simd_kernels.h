@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "host/trace/stats.h"
 #include "kernels/types.h"
 #include "simd/bvh_wide.h"
 
@@ -44,14 +45,9 @@ struct KernelScene {
   const Triangle* triangles = nullptr;
   const ConeData* cones = nullptr;
   const Cone* coneGeometry = nullptr;  // the scene's cones (Cone_IntersectN's double-float cold path)
-  PrimCounts counts{};
+  PrimRanges ranges{};
   const std::uint32_t* primIds = nullptr;  // scene id of every g
   int unifiedHits = 0;                     // TraceConfig::unifiedHits
-};
-
-// Sums of Havran's per-ray measures (host/trace/tracer.h TraceStatsSum).
-struct KernelStats {
-  std::uint64_t rays = 0, nIT = 0, nTS = 0, nLeaves = 0, nEmptyLeaves = 0;
 };
 
 // Rays at positions [begin, end) of the ray order: ray order[p] (p itself
@@ -69,7 +65,7 @@ struct KernelJob {
   std::uint32_t imageWidth = 0;
   std::size_t begin = 0, end = 0;
   int occlusion = 0;
-  KernelStats* stats = nullptr;  // non-null for statistics kernels
+  TraceStatsSum* stats = nullptr;  // non-null for statistics kernels
 };
 
 using KernelFn = void (*)(const KernelScene&, const KernelJob&);

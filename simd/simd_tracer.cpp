@@ -21,13 +21,13 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 #include "simd/bvh_wide_builder.h"
 #include "simd/isa.h"
 #include "simd/ray_coherence.h"
 #include "simd/ray_order.h"
 #include "simd/simd_kernels.h"
-#include "trace/tracer.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 
@@ -134,7 +134,7 @@ class SimdTracer final : public Tracer {
     sc_.triangles = scene.triangles.data();
     sc_.cones = cones_.data();
     sc_.coneGeometry = scene.cones.data();
-    sc_.counts = scene.Counts();
+    sc_.ranges = scene.Ranges();
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
 
@@ -156,7 +156,7 @@ class SimdTracer final : public Tracer {
     hits.resize(rays.size());
     traced_ = true;
     const bool wantStats = config_.stats && stats;
-    KernelStats sum;
+    TraceStatsSum sum;
     if (!packetFn_) {
       // No primitives: every ray misses.
       for (auto& h : hits) h = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
@@ -239,13 +239,13 @@ class SimdTracer final : public Tracer {
   // blocks of whole packets: small enough to balance the threads, large
   // enough to amortise the scheduling.
   void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits,
-           const std::vector<std::uint32_t>& order, std::uint32_t imageWidth, bool occlusion, KernelStats* sum) const
+           const std::vector<std::uint32_t>& order, std::uint32_t imageWidth, bool occlusion, TraceStatsSum* sum) const
   {
     const std::size_t n = order.empty() ? rays.size() : order.size();
     const std::size_t unit = packet ? std::size_t(width_) : 1;
     const std::size_t nUnits = (n + unit - 1) / unit;
     const std::size_t grain = packet ? 16 : 64;
-    tbb::enumerable_thread_specific<KernelStats> local;
+    tbb::enumerable_thread_specific<TraceStatsSum> local;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
       KernelJob job;
       job.rays = rays.data();
@@ -259,17 +259,8 @@ class SimdTracer final : public Tracer {
       fn(sc_, job);
     });
     if (sum) {
-      for (const KernelStats& s : local) Add(*sum, s);
+      for (const TraceStatsSum& s : local) AddStats(*sum, s);
     }
-  }
-
-  static void Add(KernelStats& a, const KernelStats& b)
-  {
-    a.rays += b.rays;
-    a.nIT += b.nIT;
-    a.nTS += b.nTS;
-    a.nLeaves += b.nLeaves;
-    a.nEmptyLeaves += b.nEmptyLeaves;
   }
 
   // Grid packets of an incoherent set: input order or direction class
@@ -324,7 +315,7 @@ class SimdTracer final : public Tracer {
   // variant wins depends on the scene as much as on the rays (docs/SIMD.md:
   // on random rays packets win on balls and tree, single rays on gears and
   // teapot), so no ray-set statistic predicts it as well.
-  bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, KernelStats* sum,
+  bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* sum,
              const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
   {
     // seq: the positions in the order to trace them (the rays themselves when empty).
@@ -337,7 +328,7 @@ class SimdTracer final : public Tracer {
     const std::size_t stride = nBlocks / nPairs;
     std::vector<char> isPilot(nBlocks, 0);
     double seconds[2] = {0.0, 0.0};
-    KernelStats pilotStats;
+    TraceStatsSum pilotStats;
     for (std::size_t i = 0; i < nPilot; ++i) {
       const std::size_t b = (i / 2) * stride + (i & 1);
       isPilot[b] = 1;
@@ -354,7 +345,7 @@ class SimdTracer final : public Tracer {
       (single ? singleFn_ : packetFn_)(sc_, job);
       seconds[single] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    if (sum) Add(*sum, pilotStats);
+    if (sum) AddStats(*sum, pilotStats);
     rest.clear();
     rest.reserve(n - nPilot * kPilotBlock);
     for (std::size_t p = 0; p < n; ++p)

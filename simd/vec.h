@@ -2,11 +2,14 @@
 // vbool<N>: N = 4 (SSE4.1) and N = 8 (AVX2). The only place besides the
 // kernels of simd/ where intrinsics appear.
 //
-// Every translation unit that includes this header is compiled for one ISA
-// and defines CR_SIMD_NS (sse4 or avx2) first: all wrappers and kernels then
-// live in cr::simd::CR_SIMD_NS, so the same inline function compiled with
-// different -m flags in two units has two different names and the linker can
-// never hand the SSE4 path an AVX2 copy (an ODR trap of per-ISA builds).
+// Every translation unit that includes this header is compiled for one ISA,
+// and the ISA's namespace (CR_SIMD_NS: sse4 or avx2) and vector width
+// (CR_SIMD_WIDTH) follow from its flags, as in Embree's kernels/common/isa.h:
+// one source, compiled once per ISA (simd/CMakeLists.txt). All wrappers and
+// kernels live in cr::simd::CR_SIMD_NS, so the same inline function compiled
+// with different -m flags in two units has two different names and the
+// linker can never hand the SSE4 path an AVX2 copy (an ODR trap of per-ISA
+// builds).
 //
 // Semantics are those of the scalar kernels, lane by lane, and nothing else:
 // no FMA, no approximate reciprocals. Min/Max are the raw instructions
@@ -14,12 +17,17 @@
 // fminf/fmaxf (a NaN operand is ignored).
 #pragma once
 
-#ifndef CR_SIMD_NS
-#error "define CR_SIMD_NS (the ISA namespace) before including simd/vec.h"
+#if defined(__AVX2__) && defined(__FMA__)
+#define CR_SIMD_NS avx2
+#define CR_SIMD_WIDTH 8
+#elif defined(__SSE4_1__)
+#define CR_SIMD_NS sse4
+#define CR_SIMD_WIDTH 4
+#else
+#error "simd/vec.h needs -msse4.1 or -mavx2 -mfma (the ISA units of simd/CMakeLists.txt)"
 #endif
-#if !defined(__SSE4_1__)
-#error "simd/vec.h needs -msse4.1 (or -mavx2)"
-#endif
+// Primitives per pack of the single-ray BVH (K), for both ISAs.
+#define CR_SIMD_PACK_WIDTH 4
 
 #include <immintrin.h>
 

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "test_util.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 namespace fs = std::filesystem;

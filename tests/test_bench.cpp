@@ -13,9 +13,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "bench/bench_options.h"
-#include "bench/report.h"
-#include "test_util.h"
+#include "host/bench/bench_options.h"
+#include "host/bench/report.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 namespace fs = std::filesystem;

@@ -1,13 +1,13 @@
 // Conformance: every structure on every CPU backend against the fp64
 // reference, on every SPD scene and ray kind, at a reduced ray count
 // (the full-size run is bench/conformance.sh).
-#include "test_util.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 
 namespace {
 
-const AccelKind kAccels[] = {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree};
+constexpr auto& kAccels = kAccelKinds;
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 
 void RunConformance(Backend backend, Precision precision, int size)

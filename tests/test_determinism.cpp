@@ -24,10 +24,10 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
-#include "cl/cl_device.h"
-#include "render/image_io.h"
+#include "host/cl/cl_device.h"
+#include "host/render/image_io.h"
 #include "simd/isa.h"
-#include "test_util.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 namespace fs = std::filesystem;
@@ -67,15 +67,15 @@ std::vector<Config> Configs()
 {
   std::vector<Config> out;
   out.push_back(Make(Backend::Reference, AccelKind::BVH));
-  for (AccelKind a : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH}) out.push_back(Make(Backend::Scalar, a));
+  for (AccelKind a : kAccelKinds) out.push_back(Make(Backend::Scalar, a));
   out.push_back(Make(Backend::Scalar, AccelKind::BVH, "", "", Precision::Fast));
   out.push_back(Make(Backend::Scalar, AccelKind::BVH, "", "", Precision::Fp64));
   for (const std::string& isa : simd::SupportedVectorIsas())
-    for (AccelKind a : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH})
+    for (AccelKind a : kAccelKinds)
       for (const char* v : {"packet", "single"}) out.push_back(Make(Backend::Simd, a, v, isa.c_str()));
   out.push_back(Make(Backend::Simd, AccelKind::BVH, "packet", "", Precision::Fast));
   if (HasOpenCL())
-    for (AccelKind a : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH})
+    for (AccelKind a : kAccelKinds)
       for (const char* v : {"ray", "packet"}) out.push_back(Make(Backend::OpenCL, a, v));
   if (EmbreeAvailable())
     for (const char* v : {"single", "packet8"}) out.push_back(Make(Backend::Embree, AccelKind::BVH, v));

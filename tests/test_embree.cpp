@@ -5,8 +5,8 @@
 // Cone_Intersect); without it, Embree may miss marginal surfaces, but every
 // primitive it names must be a real intersection (the id mapping) and every
 // occluder it reports must occlude.
-#include "core/error.h"
-#include "test_util.h"
+#include "host/core/error.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 

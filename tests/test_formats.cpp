@@ -6,9 +6,9 @@
 
 #include <unistd.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
-#include "test_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 namespace fs = std::filesystem;

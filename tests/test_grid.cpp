@@ -13,10 +13,10 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
-#include "accel/accel.h"
-#include "core/error.h"
-#include "scene/scene.h"
-#include "trace/tracer.h"
+#include "host/accel/accel.h"
+#include "host/core/error.h"
+#include "host/scene/scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 namespace test_grid {

@@ -40,12 +40,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "cl/cl_device.h"
-#include "core/error.h"
-#include "io/rays_io.h"
-#include "render/image_io.h"
-#include "scene/camera.h"
-#include "test_util.h"
+#include "host/cl/cl_device.h"
+#include "host/core/error.h"
+#include "host/io/rays_io.h"
+#include "host/render/image_io.h"
+#include "host/scene/camera.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 namespace fs = std::filesystem;
@@ -255,7 +255,7 @@ void CheckClean(const Outcome& o, const std::string& what)
   CHECK(o.err.empty());
 }
 
-constexpr AccelKind kAccels[] = {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH};
+constexpr auto& kAccels = kAccelKinds;
 
 // Every type set x structure x query for one precision and variant (42 runs).
 void Sweep(Precision precision, const char* variant)

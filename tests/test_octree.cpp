@@ -11,9 +11,9 @@
 
 #include <fmt/format.h>
 
-#include "accel/accel.h"
-#include "core/error.h"
-#include "test_util.h"
+#include "host/accel/accel.h"
+#include "host/core/error.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 

@@ -21,16 +21,16 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "cl/cl_context.h"
-#include "cl/cl_device.h"
-#include "cl/cl_error.h"
-#include "cl/cl_options.h"
-#include "cl/cl_program.h"
-#include "cl/cl_program_cache.h"
-#include "core/error.h"
-#include "render/image_io.h"
-#include "scene/camera.h"
-#include "test_util.h"
+#include "host/cl/cl_context.h"
+#include "host/cl/cl_device.h"
+#include "host/cl/cl_error.h"
+#include "host/cl/cl_options.h"
+#include "host/cl/cl_program.h"
+#include "host/cl/cl_program_cache.h"
+#include "host/core/error.h"
+#include "host/render/image_io.h"
+#include "host/scene/camera.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 
@@ -368,7 +368,7 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
   auto cache = TestCacheDir();
   const Scene& scene = test::CachedScene(test::SpdPath("mount"));
   const auto rays = test::MakeRays(scene, RayKind::Diffuse, 20);
-  for (AccelKind accel : {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree}) {
+  for (AccelKind accel : kAccelKinds) {
     TraceConfig sc;
     sc.accel = accel;
     sc.stats = true;
@@ -413,7 +413,7 @@ TEST_CASE("opencl: a scene without primitives misses everywhere, every structure
     const float x = float(i) / float(rays.size());
     rays[i] = RayRecord{{x, 0.5f, -1.0f}, 0.0f, {0.1f * x, 0.0f, 1.0f}, CR_INF};
   }
-  for (AccelKind accel : {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree})
+  for (AccelKind accel : kAccelKinds)
     for (const char* variant : {"packet", "packet-generic"}) {
       TraceConfig cfg;
       cfg.backend = Backend::OpenCL;

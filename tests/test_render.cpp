@@ -4,9 +4,9 @@
 
 #include <fmt/format.h>
 
-#include "render/image_io.h"
-#include "render/renderer.h"
-#include "test_util.h"
+#include "host/render/image_io.h"
+#include "host/render/renderer.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/error.h"
-#include "core/file_util.h"
-#include "scene/triangulate.h"
-#include "test_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
+#include "host/scene/triangulate.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 

@@ -6,16 +6,16 @@
 #include <cmath>
 #include <cstring>
 
-#include "core/error.h"
+#include "host/core/error.h"
 #include "simd/isa.h"
 #include "simd/ray_order.h"
-#include "test_util.h"
+#include "tests/test_util.h"
 
 using namespace cr;
 
 namespace {
 
-const AccelKind kSimdAccels[] = {AccelKind::BVH, AccelKind::Grid, AccelKind::Octree};
+constexpr auto& kSimdAccels = kAccelKinds;
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 const char* const kVariants[] = {"packet", "single"};
 

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <cstring>
 
-#include "accel/accel.h"
+#include "host/accel/accel.h"
 #include "simd/isa.h"
-#include "test_util.h"
+#include "tests/test_util.h"
 
 namespace cr::test_simd_cells {
 // The planes the traversals walk.

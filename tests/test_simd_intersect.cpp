@@ -14,7 +14,7 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 #include "simd/probe_scene.h"
 #include "simd/isa.h"
 #include "simd/simd_kernels.h"
@@ -82,7 +82,7 @@ ProbeResult ScalarPrim(const simd::ProbeScene& ps, const RayRecord& rec, std::ui
   if (fast) {
     namespace k = simd_oracle_fast;
     k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
-                   ps.sc.counts.nSpheres,   ps.sc.counts.nTriangles,   ps.sc.counts.nCones};
+                   ps.sc.ranges};
     k::Ray ray;
     k::Ray_Init(&ray, &rec);
     k::Hit h;
@@ -94,7 +94,7 @@ ProbeResult ScalarPrim(const simd::ProbeScene& ps, const RayRecord& rec, std::ui
   } else {
     namespace k = simd_oracle_robust;
     k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
-                   ps.sc.counts.nSpheres,   ps.sc.counts.nTriangles,   ps.sc.counts.nCones};
+                   ps.sc.ranges};
     k::Ray ray;
     k::Ray_Init(&ray, &rec);
     k::Hit h;
@@ -154,7 +154,7 @@ Tally ProbePrims(const KernelProbes& pr, const simd::ProbeScene& ps, const std::
                  std::uint32_t gEnd, bool fast)
 {
   Tally tally;
-  const bool uv = gBegin >= ps.sc.counts.nSpheres && gBegin < ps.sc.counts.nSpheres + ps.sc.counts.nTriangles;
+  const bool uv = Prim_Is(&ps.sc.ranges, CR_PRIM_TRIANGLE, gBegin);
   // Packet form: N rays per call, the last ray repeated to fill the packet.
   std::vector<ProbeResult> out(std::size_t(pr.width));
   for (std::uint32_t g = gBegin; g < gEnd; ++g) {
@@ -217,7 +217,7 @@ std::vector<RayRecord> RaysAround(float cx, float cy, float cz, float size, int 
 TEST_CASE("simd intersectors: shared triangle edge and vertex, signed-zero directions (watertight)")
 {
   TestScene ps;
-  const std::uint32_t t0 = ps.sc.counts.nSpheres, tEnd = t0 + ps.sc.counts.nTriangles;
+  const std::uint32_t t0 = Prim_Count(&ps.sc.ranges, CR_PRIM_SPHERE), tEnd = t0 + Prim_Count(&ps.sc.ranges, CR_PRIM_TRIANGLE);
   std::vector<RayRecord> rays;
   // Straight down onto the shared diagonal x = y and the shared vertices,
   // with every sign of zero in the lateral components.
@@ -274,7 +274,7 @@ TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
   rays.push_back(MakeRay(3.0f, 0.75f, -10.0f, 0.0f, 0.0f, 1.0f));             // tangent to sphere 1
   for (const KernelProbes& pr : AvailableProbes()) {
     for (bool fast : {false, true}) {
-      const Tally t = ProbePrims(pr, ps, rays, 0, ps.sc.counts.nSpheres, fast);
+      const Tally t = ProbePrims(pr, ps, rays, 0, Prim_Count(&ps.sc.ranges, CR_PRIM_SPHERE), fast);
       INFO("width ", pr.width, fast ? " fast" : " robust");
       CHECK(t.mismatches == 0);
       CHECK(t.hits > 0);
@@ -285,7 +285,7 @@ TEST_CASE("simd intersectors: tangent and grazing rays to spheres")
 TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerate cones")
 {
   TestScene ps;
-  const std::uint32_t c0 = ps.sc.counts.nSpheres + ps.sc.counts.nTriangles, cEnd = c0 + ps.sc.counts.nCones;
+  const std::uint32_t c0 = ps.sc.ranges.begin[CR_PRIM_CONE], cEnd = c0 + Prim_Count(&ps.sc.ranges, CR_PRIM_CONE);
   std::vector<RayRecord> rays;
   for (float z0 : {0.0f, -0.0f}) {
     rays.push_back(MakeRay(-5.0f, 1.0f, 1.0f, 1.0f, z0, z0));     // tangent to the cylinder
@@ -309,14 +309,14 @@ TEST_CASE("simd intersectors: cylinders and cones, the linear case and degenerat
 TEST_CASE("simd intersectors: seeded random rays around every primitive")
 {
   TestScene ps;
-  const PrimCounts c = ps.sc.counts;
+  const PrimRanges c = ps.sc.ranges;
   struct Group {
     std::uint32_t begin, end;
     float cx, cy, cz, size;
   };
-  const Group groups[] = {{0, c.nSpheres, 0.0f, 0.0f, 0.0f, 1.2f},
-                          {c.nSpheres, c.nSpheres + c.nTriangles, 0.5f, 0.5f, 0.3f, 0.8f},
-                          {c.nSpheres + c.nTriangles, c.nSpheres + c.nTriangles + c.nCones, 0.5f, 0.5f, 1.5f, 2.0f}};
+  const Group groups[] = {{c.begin[CR_PRIM_SPHERE], c.begin[CR_PRIM_TRIANGLE], 0.0f, 0.0f, 0.0f, 1.2f},
+                          {c.begin[CR_PRIM_TRIANGLE], c.begin[CR_PRIM_CONE], 0.5f, 0.5f, 0.3f, 0.8f},
+                          {c.begin[CR_PRIM_CONE], c.begin[CR_NUM_PRIM_TYPES], 0.5f, 0.5f, 1.5f, 2.0f}};
   unsigned seed = 1;
   for (const KernelProbes& pr : AvailableProbes()) {
     for (const Group& gr : groups) {

@@ -13,12 +13,12 @@
 
 #include <doctest/doctest.h>
 
-#include "io/rays_io.h"
-#include "rays/raygen.h"
-#include "reference/check.h"
-#include "reference/reference.h"
-#include "scene/scene.h"
-#include "trace/tracer.h"
+#include "host/io/rays_io.h"
+#include "host/rays/raygen.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
+#include "host/scene/scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr::test {
 

@@ -1,28 +1,35 @@
-#include "accel/accel.h"
+#include "host/accel/accel.h"
 
 #include <chrono>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr {
 
+std::string AccelKindNames()
+{
+  std::string names;
+  for (AccelKind k : kAccelKinds) names += (names.empty() ? "" : ", ") + std::string(AccelKindName(k));
+  return names;
+}
+
 AccelKind ParseAccelKind(const std::string& s)
 {
-  if (s == "grid") return AccelKind::Grid;
-  if (s == "octree") return AccelKind::Octree;
-  if (s == "bvh") return AccelKind::BVH;
-  throw InputError(fmt::format("unknown acceleration structure '{}' (expected grid, octree or bvh)", s));
+  for (AccelKind k : kAccelKinds)
+    if (s == AccelKindName(k)) return k;
+  throw InputError(fmt::format("unknown acceleration structure '{}' (expected one of {})", s, AccelKindNames()));
 }
 
 const char* AccelKindName(AccelKind k)
 {
   switch (k) {
-    case AccelKind::Grid: return "grid";
-    case AccelKind::Octree: return "octree";
-    case AccelKind::BVH: return "bvh";
+#define CR_ACCEL_NAME(e, name) \
+  case AccelKind::e: return name;
+    CR_ACCEL_KINDS(CR_ACCEL_NAME)
+#undef CR_ACCEL_NAME
   }
   return "?";
 }

@@ -10,13 +10,26 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "kernels/types.h"
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 
-enum class AccelKind { Grid, Octree, BVH };
+// The structures, one entry each (enum name, command-line name): the CLI,
+// the bench, the hard cases and the tests iterate kAccelKinds; nothing else
+// lists them.
+#define CR_ACCEL_KINDS(X) X(Grid, "grid") X(Octree, "octree") X(BVH, "bvh")
+
+#define CR_ACCEL_ENUM(e, name) e,
+enum class AccelKind { CR_ACCEL_KINDS(CR_ACCEL_ENUM) };
+inline constexpr AccelKind kAccelKinds[] = {
+#define CR_ACCEL_ENTRY(e, name) AccelKind::e,
+    CR_ACCEL_KINDS(CR_ACCEL_ENTRY)
+#undef CR_ACCEL_ENTRY
+};
+#undef CR_ACCEL_ENUM
 AccelKind ParseAccelKind(const std::string& s);  // InputError on unknown names
 const char* AccelKindName(AccelKind k);
+std::string AccelKindNames();  // "grid, octree, bvh": for help texts and errors
 
 struct AccelParams {
   double gridDensity = 0.0;  // Woo/Klimaszewski lambda: cells per primitive (0: default)

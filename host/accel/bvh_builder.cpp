@@ -10,8 +10,8 @@
 #include <fmt/format.h>
 #include <tbb/parallel_invoke.h>
 
-#include "accel/accel.h"
-#include "core/error.h"
+#include "host/accel/accel.h"
+#include "host/core/error.h"
 
 namespace cr {
 

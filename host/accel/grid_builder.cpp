@@ -14,9 +14,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "accel/accel.h"
-#include "accel/prim_overlap.h"
-#include "core/error.h"
+#include "host/accel/accel.h"
+#include "host/accel/prim_overlap.h"
+#include "host/core/error.h"
 
 namespace cr {
 

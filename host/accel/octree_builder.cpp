@@ -24,9 +24,9 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
-#include "accel/accel.h"
-#include "accel/prim_overlap.h"
-#include "core/error.h"
+#include "host/accel/accel.h"
+#include "host/accel/prim_overlap.h"
+#include "host/core/error.h"
 
 namespace cr {
 

@@ -1,4 +1,4 @@
-#include "accel/prim_overlap.h"
+#include "host/accel/prim_overlap.h"
 
 #include <algorithm>
 #include <cmath>

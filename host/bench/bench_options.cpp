@@ -1,4 +1,4 @@
-#include "bench/bench_options.h"
+#include "host/bench/bench_options.h"
 
 #include <algorithm>
 
@@ -48,7 +48,7 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
     if (b == Backend::Embree && !EmbreeAvailable()) return;
     out.push_back(Combo{b, a, p, std::move(v)});
   };
-  const std::vector<AccelKind> allAccels = {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH};
+  const std::vector<AccelKind> allAccels(std::begin(kAccelKinds), std::end(kAccelKinds));
   if (defaults) {
     // Speed: every structure on the CPU default and on OpenCL, the packet
     // variants, Embree.

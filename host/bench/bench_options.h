@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "accel/accel.h"
-#include "rays/raygen.h"
-#include "trace/tracer.h"
+#include "host/accel/accel.h"
+#include "host/rays/raygen.h"
+#include "host/trace/tracer.h"
 
 namespace cr::bench {
 

@@ -1,4 +1,4 @@
-#include "bench/bench_row.h"
+#include "host/bench/bench_row.h"
 
 #include <nlohmann/json.hpp>
 

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "bench/bench_options.h"
+#include "host/bench/bench_options.h"
 
 namespace cr::bench {
 

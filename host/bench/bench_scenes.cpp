@@ -1,4 +1,4 @@
-#include "bench/bench_scenes.h"
+#include "host/bench/bench_scenes.h"
 
 #include <algorithm>
 #include <charconv>
@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "scene/generate.h"
+#include "host/core/error.h"
+#include "host/scene/generate.h"
 
 namespace cr::bench {
 

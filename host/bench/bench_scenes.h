@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr::bench {
 

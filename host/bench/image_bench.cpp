@@ -1,4 +1,4 @@
-#include "bench/image_bench.h"
+#include "host/bench/image_bench.h"
 
 #include <chrono>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/error.h"
-#include "render/image_io.h"
-#include "render/renderer.h"
+#include "host/core/error.h"
+#include "host/render/image_io.h"
+#include "host/render/renderer.h"
 
 namespace cr::bench {
 

@@ -13,8 +13,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "bench/bench_options.h"
-#include "bench/bench_scenes.h"
+#include "host/bench/bench_options.h"
+#include "host/bench/bench_scenes.h"
 
 namespace cr::bench {
 

@@ -1,4 +1,4 @@
-#include "bench/machine_info.h"
+#include "host/bench/machine_info.h"
 
 #include <malloc.h>
 
@@ -14,7 +14,7 @@
 #include <tbb/info.h>
 
 #include "simd/isa.h"
-#include "trace/tracer.h"
+#include "host/trace/tracer.h"
 
 #ifdef CELLRAY_HAVE_EMBREE
 #include <embree3/rtcore_config.h>

@@ -1,4 +1,4 @@
-#include "bench/ray_bench.h"
+#include "host/bench/ray_bench.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,11 +8,11 @@
 #include <fmt/format.h>
 #include <tbb/info.h>
 
-#include "bench/machine_info.h"
-#include "bench/ray_cache.h"
-#include "core/error.h"
-#include "reference/check.h"
-#include "reference/reference.h"
+#include "host/bench/machine_info.h"
+#include "host/bench/ray_cache.h"
+#include "host/core/error.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
 
 namespace cr::bench {
 

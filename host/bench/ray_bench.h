@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "bench/bench_options.h"
-#include "bench/bench_row.h"
-#include "bench/bench_scenes.h"
+#include "host/bench/bench_options.h"
+#include "host/bench/bench_row.h"
+#include "host/bench/bench_scenes.h"
 
 namespace cr::bench {
 

@@ -1,4 +1,4 @@
-#include "bench/ray_cache.h"
+#include "host/bench/ray_cache.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,9 +9,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/error.h"
-#include "core/file_util.h"
-#include "io/rays_io.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
+#include "host/io/rays_io.h"
 
 namespace cr::bench {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "bench/bench_scenes.h"
+#include "host/bench/bench_scenes.h"
 #include "kernels/types.h"
-#include "rays/raygen.h"
-#include "reference/reference.h"
+#include "host/rays/raygen.h"
+#include "host/reference/reference.h"
 
 namespace cr::bench {
 

@@ -1,4 +1,4 @@
-#include "bench/report.h"
+#include "host/bench/report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr::bench {
 

@@ -1,4 +1,4 @@
-#include "bench/scaling.h"
+#include "host/bench/scaling.h"
 
 #include <fmt/format.h>
 

@@ -8,8 +8,8 @@
 
 #include <vector>
 
-#include "bench/bench_options.h"
-#include "bench/bench_scenes.h"
+#include "host/bench/bench_options.h"
+#include "host/bench/bench_scenes.h"
 
 namespace cr::bench {
 

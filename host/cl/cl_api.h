@@ -11,4 +11,4 @@
 #endif
 #include <CL/opencl.hpp>
 
-#include "cl/cl_error.h"
+#include "host/cl/cl_error.h"

@@ -1,9 +1,9 @@
-#include "cl/cl_context.h"
+#include "host/cl/cl_context.h"
 
 #include <fmt/format.h>
 
-#include "cl/cl_fault.h"
-#include "core/error.h"
+#include "host/cl/cl_fault.h"
+#include "host/core/error.h"
 
 namespace cr {
 

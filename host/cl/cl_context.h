@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <string>
 
-#include "cl/cl_api.h"
-#include "cl/cl_device.h"
+#include "host/cl/cl_api.h"
+#include "host/cl/cl_device.h"
 
 namespace cr {
 

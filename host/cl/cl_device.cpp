@@ -1,4 +1,4 @@
-#include "cl/cl_device.h"
+#include "host/cl/cl_device.h"
 
 #include <algorithm>
 #include <charconv>
@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "cl/cl_fault.h"
-#include "core/error.h"
+#include "host/cl/cl_fault.h"
+#include "host/core/error.h"
 
 namespace cr {
 

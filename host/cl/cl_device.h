@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "cl/cl_api.h"
+#include "host/cl/cl_api.h"
 
 namespace cr {
 

@@ -1,10 +1,10 @@
-#include "cl/cl_error.h"
+#include "host/cl/cl_error.h"
 
 #include <cstring>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr {
 

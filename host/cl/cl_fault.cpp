@@ -1,11 +1,11 @@
-#include "cl/cl_fault.h"
+#include "host/cl/cl_fault.h"
 
 #include <cstdlib>
 #include <string_view>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr {
 

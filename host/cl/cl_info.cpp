@@ -1,6 +1,6 @@
-#include "cl/cl_info.h"
+#include "host/cl/cl_info.h"
 
-#include "cl/cl_device.h"
+#include "host/cl/cl_device.h"
 
 namespace cr {
 

@@ -1,10 +1,10 @@
-#include "cl/cl_options.h"
+#include "host/cl/cl_options.h"
 
 #include <cstdio>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "cl/cl_device.h"
-#include "trace/tracer.h"
+#include "host/cl/cl_device.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 

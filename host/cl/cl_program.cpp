@@ -1,13 +1,13 @@
-#include "cl/cl_program.h"
+#include "host/cl/cl_program.h"
 
 #include <chrono>
 #include <filesystem>
 
 #include <fmt/format.h>
 
-#include "cl/cl_fault.h"
-#include "cl/cl_program_cache.h"
-#include "core/error.h"
+#include "host/cl/cl_fault.h"
+#include "host/cl/cl_program_cache.h"
+#include "host/core/error.h"
 
 extern const char* const kCellrayKernelSource;
 extern const std::size_t kCellrayKernelSourceLength;

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "cl/cl_api.h"
-#include "cl/cl_device.h"
+#include "host/cl/cl_api.h"
+#include "host/cl/cl_device.h"
 
 namespace cr {
 

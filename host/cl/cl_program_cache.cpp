@@ -1,4 +1,4 @@
-#include "cl/cl_program_cache.h"
+#include "host/cl/cl_program_cache.h"
 
 #include <cstdlib>
 #include <cstring>
@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr {
 

@@ -9,12 +9,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "cl/cl_context.h"
-#include "cl/cl_fault.h"
-#include "cl/cl_options.h"
-#include "cl/cl_program.h"
-#include "core/error.h"
-#include "trace/tracer.h"
+#include "host/cl/cl_context.h"
+#include "host/cl/cl_fault.h"
+#include "host/cl/cl_options.h"
+#include "host/cl/cl_program.h"
+#include "host/core/error.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 
@@ -286,14 +286,14 @@ class ClTracer final : public Tracer {
 
   void BindScene(cl::Kernel& k, const char* name)
   {
-    const PrimCounts counts = scene_.Counts();
+    const PrimRanges r = scene_.Ranges();
     SetArg(k, kArgSpheres, spheres_, name);
     SetArg(k, kArgTriangles, triangles_, name);
     SetArg(k, kArgCones, cones_, name);
     SetArg(k, kArgPrimIds, primIds_, name);
-    SetArg(k, kArgNSpheres, cl_uint(counts.nSpheres), name);
-    SetArg(k, kArgNTriangles, cl_uint(counts.nTriangles), name);
-    SetArg(k, kArgNCones, cl_uint(counts.nCones), name);
+    SetArg(k, kArgNSpheres, cl_uint(Prim_Count(&r, CR_PRIM_SPHERE)), name);
+    SetArg(k, kArgNTriangles, cl_uint(Prim_Count(&r, CR_PRIM_TRIANGLE)), name);
+    SetArg(k, kArgNCones, cl_uint(Prim_Count(&r, CR_PRIM_CONE)), name);
     SetArg(k, kArgBvhNodes, bvhNodes_, name);
     SetArg(k, kArgBvhRefs, bvhRefs_, name);
     SetArg(k, kArgGrid, gridHeader_, name);
@@ -390,7 +390,7 @@ class ClTracer final : public Tracer {
         s.nLeaves += per[4 * i + 2];
         s.nEmptyLeaves += per[4 * i + 3];
       }
-      stats->Add(s);
+      AddStats(*stats, s);
     }
   }
 

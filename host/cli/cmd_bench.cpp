@@ -16,19 +16,19 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "bench/bench_options.h"
-#include "bench/bench_row.h"
-#include "bench/bench_scenes.h"
-#include "bench/hard.h"
-#include "bench/image_bench.h"
-#include "bench/machine_info.h"
-#include "bench/ray_bench.h"
-#include "bench/report.h"
-#include "bench/scaling.h"
-#include "cl/cl_context.h"
-#include "cli/commands.h"
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/bench/bench_options.h"
+#include "host/bench/bench_row.h"
+#include "host/bench/bench_scenes.h"
+#include "tests/hard/gen/hard.h"
+#include "host/bench/image_bench.h"
+#include "host/bench/machine_info.h"
+#include "host/bench/ray_bench.h"
+#include "host/bench/report.h"
+#include "host/bench/scaling.h"
+#include "host/cl/cl_context.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr::cli {
 

@@ -2,14 +2,14 @@
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "core/error.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
 
 namespace cr::cli {
 
 void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
 {
-  cmd->add_option("--accel", o.accel, "Acceleration structure: grid, octree or bvh")->capture_default_str();
+  cmd->add_option("--accel", o.accel, "Acceleration structure: " + AccelKindNames())->capture_default_str();
   cmd->add_option("--backend", o.backend,
                   "Backend: auto (an OpenCL GPU if present, else simd), reference, scalar, simd, opencl, or embree "
                   "(when built with Embree)")

@@ -4,9 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/commands.h"
-#include "core/error.h"
-#include "scene/generate.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
+#include "host/scene/generate.h"
 
 namespace cr::cli {
 

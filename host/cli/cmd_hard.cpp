@@ -1,4 +1,4 @@
-// hard: runs the hard-case suite (bench/hard.h) and writes its report, the
+// hard: runs the hard-case suite (tests/hard/gen/hard.h) and writes its report, the
 // case list and the table of wrong rays, as Markdown (docs/HARD_CASES.md is
 // made with `cellray hard -o docs/HARD_CASES.md`). A stopgap until
 // `cellray bench --hard` reports the same table.
@@ -9,10 +9,10 @@
 
 #include <fmt/format.h>
 
-#include "bench/hard.h"
-#include "cli/commands.h"
-#include "core/error.h"
-#include "core/file_util.h"
+#include "tests/hard/gen/hard.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr::cli {
 

@@ -3,8 +3,8 @@
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>
 
-#include "cl/cl_info.h"
-#include "cli/commands.h"
+#include "host/cl/cl_info.h"
+#include "host/cli/commands.h"
 #include "simd/isa.h"
 
 namespace cr::cli {

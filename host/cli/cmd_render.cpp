@@ -7,11 +7,11 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
-#include "cli/commands.h"
-#include "core/error.h"
-#include "core/file_util.h"
-#include "render/image_io.h"
-#include "render/renderer.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
+#include "host/render/image_io.h"
+#include "host/render/renderer.h"
 
 namespace cr::cli {
 

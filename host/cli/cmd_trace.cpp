@@ -9,13 +9,13 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "cli/commands.h"
-#include "core/error.h"
-#include "io/rays_io.h"
-#include "rays/raygen.h"
-#include "reference/check.h"
-#include "reference/reference.h"
-#include "scene/camera.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
+#include "host/io/rays_io.h"
+#include "host/rays/raygen.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
+#include "host/scene/camera.h"
 
 namespace cr::cli {
 

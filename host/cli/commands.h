@@ -7,7 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "trace/tracer.h"
+#include "host/trace/tracer.h"
 
 namespace cr::cli {
 

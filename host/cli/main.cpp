@@ -9,8 +9,8 @@
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
-#include "cli/commands.h"
-#include "core/error.h"
+#include "host/cli/commands.h"
+#include "host/core/error.h"
 
 int main(int argc, char** argv)
 {

@@ -1,4 +1,4 @@
-#include "core/error.h"
+#include "host/core/error.h"
 
 #include <atomic>
 #include <cstdio>

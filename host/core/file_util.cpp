@@ -1,4 +1,4 @@
-#include "core/file_util.h"
+#include "host/core/file_util.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr {
 

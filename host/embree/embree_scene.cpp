@@ -1,6 +1,6 @@
 #ifdef CELLRAY_HAVE_EMBREE
 
-#include "embree/embree_scene.h"
+#include "host/embree/embree_scene.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
+#include "host/core/error.h"
 #include "kernels/types.h"
 
 // Our float cone test (kernels/intersect.h, robust mode) for the user
@@ -153,7 +153,9 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
     scene_ = rtcNewScene(device_);
     rtcSetSceneFlags(scene_, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);  // Embree's default
-    const PrimCounts counts = scene.Counts();
+    const PrimRanges r = scene.Ranges();
+    const std::uint32_t nSpheres = Prim_Count(&r, CR_PRIM_SPHERE), nTriangles = Prim_Count(&r, CR_PRIM_TRIANGLE),
+                        nCones = Prim_Count(&r, CR_PRIM_CONE);
     std::uint32_t geomID = 0;
     auto attach = [&](RTCGeometry geom, std::uint32_t base, const char* what) {
       rtcCommitGeometry(geom);
@@ -164,35 +166,35 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
       base_.push_back(base);
       ++geomID;
     };
-    if (counts.nSpheres > 0) {
+    if (nSpheres > 0) {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
       // Sphere is {centre[3], radius}: Embree's FLOAT4 point layout as is.
       rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, scene.spheres.data(), 0,
-                                 sizeof(Sphere), counts.nSpheres);
+                                 sizeof(Sphere), nSpheres);
       rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
       attach(g, 0, "sphere geometry");
     }
-    if (counts.nTriangles > 0) {
+    if (nTriangles > 0) {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
       // Triangle holds v0, v1, v2 each in 16 bytes (xyz and a 4-byte field):
       // a vertex buffer of stride 16 read in place, vertex 3i + k being vk of
       // piece i; the last vertex is followed by its pad, so Embree's 16-byte
       // loads stay inside the array.
       rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.triangles.data(), 0, 16,
-                                 std::size_t(counts.nTriangles) * 3);
-      indices_.resize(std::size_t(counts.nTriangles) * 3);
+                                 std::size_t(nTriangles) * 3);
+      indices_.resize(std::size_t(nTriangles) * 3);
       for (std::size_t i = 0; i < indices_.size(); ++i) indices_[i] = static_cast<std::uint32_t>(i);
       rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
-                                 3 * sizeof(std::uint32_t), counts.nTriangles);
+                                 3 * sizeof(std::uint32_t), nTriangles);
       rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
-      attach(g, counts.nSpheres, "triangle geometry");
+      attach(g, r.begin[CR_PRIM_TRIANGLE], "triangle geometry");
     }
-    if (counts.nCones > 0) {
+    if (nCones > 0) {
       cones_ = std::make_unique<ConeUser>();
       cones_->cones = scene.cones.data();
-      cones_->bounds.resize(counts.nCones);
-      for (std::uint32_t i = 0; i < counts.nCones; ++i) {
-        const Bounds b = scene.UnifiedBounds(counts.nSpheres + counts.nTriangles + i);
+      cones_->bounds.resize(nCones);
+      for (std::uint32_t i = 0; i < nCones; ++i) {
+        const Bounds b = scene.UnifiedBounds(r.begin[CR_PRIM_CONE] + i);
         // A few ulps of slack: the float test may report a point a rounding
         // error outside the exact surface's box.
         const float pad = 1e-6f * std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z), std::fabs(b.hi.x),
@@ -201,12 +203,12 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
                                            b.hi.x + pad, b.hi.y + pad, b.hi.z + pad, 0.0f};
       }
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
-      rtcSetGeometryUserPrimitiveCount(g, counts.nCones);
+      rtcSetGeometryUserPrimitiveCount(g, nCones);
       rtcSetGeometryUserData(g, cones_.get());
       rtcSetGeometryBoundsFunction(g, &ConeBounds, nullptr);
       rtcSetGeometryIntersectFunction(g, &ConeIntersect);
       rtcSetGeometryOccludedFunction(g, &ConeOccluded);
-      attach(g, counts.nSpheres + counts.nTriangles, "cone user geometry");
+      attach(g, r.begin[CR_PRIM_CONE], "cone user geometry");
     }
     empty_ = geomID == 0;
     rtcCommitScene(scene_);

@@ -27,7 +27,7 @@
 
 #include <embree3/rtcore.h>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr::embree {
 

@@ -16,9 +16,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "core/error.h"
-#include "embree/embree_scene.h"
-#include "trace/tracer.h"
+#include "host/core/error.h"
+#include "host/embree/embree_scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 

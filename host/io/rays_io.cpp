@@ -1,4 +1,4 @@
-#include "io/rays_io.h"
+#include "host/io/rays_io.h"
 
 #include <bit>
 #include <cmath>
@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr {
 

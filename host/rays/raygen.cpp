@@ -1,4 +1,4 @@
-#include "rays/raygen.h"
+#include "host/rays/raygen.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
-#include "core/error.h"
-#include "scene/camera.h"
-#include "scene/surface.h"
+#include "host/core/error.h"
+#include "host/scene/camera.h"
+#include "host/scene/surface.h"
 
 namespace cr {
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "kernels/types.h"
-#include "reference/reference.h"
-#include "scene/scene.h"
+#include "host/reference/reference.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 

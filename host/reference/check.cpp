@@ -1,4 +1,4 @@
-#include "reference/check.h"
+#include "host/reference/check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -99,7 +99,7 @@ double ClosestOnSegment(const glm::dvec3& p1, const glm::dvec3& q1, const glm::d
 bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
 {
   const Scene& scene = tr.GetScene();
-  const PrimCounts n = scene.Counts();
+  const PrimRanges n = scene.Ranges();
   const double dl = glm::length(r.d);
   auto delta = [&](double t) { return Delta(r, t); };
   std::vector<std::uint32_t> pieces;
@@ -109,16 +109,16 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
     glm::dvec3 pts[3];
     int nPts = 0;
     double rad = 0.0;
-    if (g < n.nSpheres) {
+    if (g < Prim_End(&n, CR_PRIM_SPHERE)) {
       pts[nPts++] = D3(scene.spheres[g].center);
       rad = scene.spheres[g].radius;
-    } else if (g < n.nSpheres + n.nTriangles) {
-      const Triangle& t = scene.triangles[g - n.nSpheres];
+    } else if (g < Prim_End(&n, CR_PRIM_TRIANGLE)) {
+      const Triangle& t = scene.triangles[Prim_Local(&n, CR_PRIM_TRIANGLE, g)];
       pts[nPts++] = D3(t.v0);
       pts[nPts++] = D3(t.v1);
       pts[nPts++] = D3(t.v2);
     } else {
-      const Cone& c = scene.cones[g - n.nSpheres - n.nTriangles];
+      const Cone& c = scene.cones[Prim_Local(&n, CR_PRIM_CONE, g)];
       pts[nPts++] = D3(c.base);
       pts[nPts++] = D3(c.apex);
       rad = std::max(c.baseRadius, c.apexRadius);
@@ -134,9 +134,9 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
     if (!(t0 <= t1)) continue;
     const glm::dvec3 a = r.o + t0 * r.d, b = r.o + t1 * r.d;
     std::vector<double> ts = {t0, t1};
-    if (g < n.nSpheres) {
+    if (g < Prim_End(&n, CR_PRIM_SPHERE)) {
       ts.push_back(std::clamp(tc, t0, t1));
-    } else if (g < n.nSpheres + n.nTriangles) {
+    } else if (g < Prim_End(&n, CR_PRIM_TRIANGLE)) {
       for (int k = 0; k < 3; ++k) ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[k], pts[(k + 1) % 3]));
     } else {
       ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[0], pts[1]));

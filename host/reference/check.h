@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "kernels/types.h"
-#include "reference/reference.h"
+#include "host/reference/reference.h"
 
 namespace cr::ref {
 

@@ -1,4 +1,4 @@
-#include "reference/geometry_d.h"
+#include "host/reference/geometry_d.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,11 +1,11 @@
-#include "reference/reference.h"
+#include "host/reference/reference.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 
-#include "core/error.h"
+#include "host/core/error.h"
 
 namespace cr::ref {
 
@@ -19,22 +19,22 @@ glm::dvec3 Down(const glm::dvec3& v) { return {std::nextafter(v.x, -INFINITY), s
 glm::dvec3 Up(const glm::dvec3& v) { return {std::nextafter(v.x, INFINITY), std::nextafter(v.y, INFINITY), std::nextafter(v.z, INFINITY)}; }
 }  // namespace
 
-ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), counts_(scene.Counts())
+ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), ranges_(scene.Ranges())
 {
   const std::uint32_t n = scene.NumUnified();
   std::vector<glm::dvec3> lo(n), hi(n);
   for (std::uint32_t g = 0; g < n; ++g) {
-    if (g < counts_.nSpheres) {
+    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) {
       const Sphere& s = scene.spheres[g];
       lo[g] = Down(D3(s.center) - double(s.radius));
       hi[g] = Up(D3(s.center) + double(s.radius));
-    } else if (g < counts_.nSpheres + counts_.nTriangles) {
-      const Triangle& t = scene.triangles[g - counts_.nSpheres];
+    } else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) {
+      const Triangle& t = scene.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)];
       lo[g] = glm::min(D3(t.v0), glm::min(D3(t.v1), D3(t.v2)));
       hi[g] = glm::max(D3(t.v0), glm::max(D3(t.v1), D3(t.v2)));
     } else {
       // Box of the two end discs, padded.
-      const Cone& c = scene.cones[g - counts_.nSpheres - counts_.nTriangles];
+      const Cone& c = scene.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)];
       glm::dvec3 p0 = D3(c.base), p1 = D3(c.apex), w = glm::normalize(p1 - p0);
       glm::dvec3 e = glm::sqrt(glm::max(glm::dvec3(1.0) - w * w, glm::dvec3(0.0)));
       glm::dvec3 l = glm::min(p0 - e * double(c.baseRadius), p1 - e * double(c.apexRadius));
@@ -125,10 +125,10 @@ void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) con
 
 int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u, double* v) const
 {
-  if (g < counts_.nSpheres) return SphereRoots(ray, scene_.spheres[g], t);
-  if (g < counts_.nSpheres + counts_.nTriangles)
-    return TriangleRoots(ray, scene_.triangles[g - counts_.nSpheres], t, u, v);
-  return ConeRoots(ray, scene_.cones[g - counts_.nSpheres - counts_.nTriangles], t);
+  if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) return SphereRoots(ray, scene_.spheres[g], t);
+  if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE))
+    return TriangleRoots(ray, scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)], t, u, v);
+  return ConeRoots(ray, scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], t);
 }
 
 RefHit ReferenceTracer::Intersect(const DRay& ray) const
@@ -185,8 +185,8 @@ void ReferenceTracer::PiecesOf(std::uint32_t prim, std::vector<std::uint32_t>& o
   const PrimInfo& info = scene_.prims[prim];
   std::uint32_t base = 0;
   if (info.kind == PrimKind::kSphere) base = 0;
-  else if (info.kind == PrimKind::kCone) base = counts_.nSpheres + counts_.nTriangles;
-  else base = counts_.nSpheres;
+  else if (info.kind == PrimKind::kCone) base = ranges_.begin[CR_PRIM_CONE];
+  else base = ranges_.begin[CR_PRIM_TRIANGLE];
   for (std::uint32_t i = 0; i < info.nPieces; ++i) out.push_back(base + info.firstPiece + i);
 }
 
@@ -197,9 +197,9 @@ double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) 
   double best = INFINITY;
   for (std::uint32_t g : pieces) {
     double d;
-    if (g < counts_.nSpheres) d = SphereDistance(scene_.spheres[g], p);
-    else if (g < counts_.nSpheres + counts_.nTriangles) d = TriangleDistance(scene_.triangles[g - counts_.nSpheres], p);
-    else d = ConeDistance(scene_.cones[g - counts_.nSpheres - counts_.nTriangles], p);
+    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) d = SphereDistance(scene_.spheres[g], p);
+    else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) d = TriangleDistance(scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)], p);
+    else d = ConeDistance(scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], p);
     best = std::min(best, d);
   }
   return best;
@@ -212,14 +212,14 @@ double ReferenceTracer::PrimScale(std::uint32_t prim) const
   auto m = [](const float* p) { return std::max(std::fabs(double(p[0])), std::max(std::fabs(double(p[1])), std::fabs(double(p[2])))); };
   double s = 0.0;
   for (std::uint32_t g : pieces) {
-    if (g < counts_.nSpheres) {
+    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) {
       const Sphere& sp = scene_.spheres[g];
       s = std::max(s, m(sp.center) + sp.radius);
-    } else if (g < counts_.nSpheres + counts_.nTriangles) {
-      const Triangle& t = scene_.triangles[g - counts_.nSpheres];
+    } else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) {
+      const Triangle& t = scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)];
       s = std::max(s, std::max(m(t.v0), std::max(m(t.v1), m(t.v2))));
     } else {
-      const Cone& c = scene_.cones[g - counts_.nSpheres - counts_.nTriangles];
+      const Cone& c = scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)];
       s = std::max(s, std::max(m(c.base) + c.baseRadius, m(c.apex) + c.apexRadius));
     }
   }
@@ -228,16 +228,16 @@ double ReferenceTracer::PrimScale(std::uint32_t prim) const
 
 glm::dvec3 ReferenceTracer::GeometricNormal(std::uint32_t g, const glm::dvec3& p) const
 {
-  if (g < counts_.nSpheres) return SphereNormal(scene_.spheres[g], p);
-  if (g < counts_.nSpheres + counts_.nTriangles) return glm::normalize(TriangleNormal(scene_.triangles[g - counts_.nSpheres]));
-  return ConeNormal(scene_.cones[g - counts_.nSpheres - counts_.nTriangles], p);
+  if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) return SphereNormal(scene_.spheres[g], p);
+  if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) return glm::normalize(TriangleNormal(scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)]));
+  return ConeNormal(scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], p);
 }
 
 glm::dvec3 ReferenceTracer::ShadingNormal(std::uint32_t g, const glm::dvec3& p, double u, double v) const
 {
   glm::dvec3 ng = GeometricNormal(g, p);
-  if (g >= counts_.nSpheres && g < counts_.nSpheres + counts_.nTriangles && scene_.HasPatchNormals()) {
-    const TriNormals& n = scene_.triNormals[g - counts_.nSpheres];
+  if (Prim_Is(&ranges_, CR_PRIM_TRIANGLE, g) && scene_.HasPatchNormals()) {
+    const TriNormals& n = scene_.triNormals[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)];
     glm::dvec3 ns = (1.0 - u - v) * glm::dvec3(n[0]) + u * glm::dvec3(n[1]) + v * glm::dvec3(n[2]);
     double len = glm::length(ns);
     if (len > 0.0) return ns / len;
@@ -255,8 +255,8 @@ HitRecord ReferenceTracer::ToRecord(const RefHit& h, bool occlusion) const
     return r;
   }
   r.t = static_cast<float>(h.t);
-  if (h.g >= counts_.nSpheres && h.g < counts_.nSpheres + counts_.nTriangles &&
-      (scene_.triangles[h.g - counts_.nSpheres].flags & CR_TRI_REPORT_UV)) {
+  if (Prim_Is(&ranges_, CR_PRIM_TRIANGLE, h.g) &&
+      (scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, h.g)].flags & CR_TRI_REPORT_UV)) {
     r.u = static_cast<float>(h.u);
     r.v = static_cast<float>(h.v);
   }
@@ -273,7 +273,7 @@ HitRecord ReferenceTracer::ToUnifiedRecord(const RefHit& h, bool occlusion) cons
   if (!h.Found()) return r;
   r.prim = h.g;
   r.t = occlusion ? 0.0f : static_cast<float>(h.t);
-  if (!occlusion && h.g >= counts_.nSpheres && h.g < counts_.nSpheres + counts_.nTriangles) {
+  if (!occlusion && Prim_Is(&ranges_, CR_PRIM_TRIANGLE, h.g)) {
     r.u = static_cast<float>(h.u);
     r.v = static_cast<float>(h.v);
   }

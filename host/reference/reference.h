@@ -11,8 +11,8 @@
 #include <glm/glm.hpp>
 
 #include "kernels/types.h"
-#include "reference/geometry_d.h"
-#include "scene/scene.h"
+#include "host/reference/geometry_d.h"
+#include "host/scene/scene.h"
 
 namespace cr::ref {
 
@@ -71,7 +71,7 @@ class ReferenceTracer {
   void Traverse(const DRay& ray, double& tmax, Visit&& visit) const;
 
   const Scene& scene_;
-  PrimCounts counts_{};
+  PrimRanges ranges_{};
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
 };

@@ -1,4 +1,4 @@
-#include "render/image_io.h"
+#include "host/render/image_io.h"
 
 #include <algorithm>
 #include <cctype>
@@ -8,8 +8,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr {
 

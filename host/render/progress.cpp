@@ -1,4 +1,4 @@
-#include "render/progress.h"
+#include "host/render/progress.h"
 
 #include <cstdio>
 

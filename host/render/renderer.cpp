@@ -1,4 +1,4 @@
-#include "render/renderer.h"
+#include "host/render/renderer.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,11 +8,11 @@
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
-#include "core/error.h"
-#include "rays/raygen.h"
-#include "render/progress.h"
-#include "scene/camera.h"
-#include "scene/surface.h"
+#include "host/core/error.h"
+#include "host/rays/raygen.h"
+#include "host/render/progress.h"
+#include "host/scene/camera.h"
+#include "host/scene/surface.h"
 
 namespace cr {
 

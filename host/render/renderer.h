@@ -12,8 +12,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "scene/scene.h"
-#include "trace/tracer.h"
+#include "host/scene/scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 

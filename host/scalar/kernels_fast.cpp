@@ -3,4 +3,4 @@
 #define CR_KERNEL_REAL float
 #define CR_FAST 1
 
-#include "scalar/kernel_instance.inc"
+#include "host/scalar/kernel_instance.inc"

@@ -3,4 +3,4 @@
 #define CR_KERNEL_REAL double
 #define CR_FP64 1
 #define CR_STATS 1
-#include "scalar/kernel_instance.inc"
+#include "host/scalar/kernel_instance.inc"

@@ -6,16 +6,16 @@
 
 #include <cstddef>
 
-#include "accel/accel.h"
+#include "host/accel/accel.h"
 #include "kernels/types.h"
-#include "trace/tracer.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 
 struct KernelArgs {
   AccelKind accel = AccelKind::BVH;
   const AccelData* data = nullptr;
-  PrimCounts counts{};
+  PrimRanges ranges{};
   const Sphere* spheres = nullptr;
   const Triangle* triangles = nullptr;
   const Cone* cones = nullptr;

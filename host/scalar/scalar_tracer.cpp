@@ -5,8 +5,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "scalar/scalar_kernels.h"
-#include "trace/tracer.h"
+#include "host/scalar/scalar_kernels.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 
@@ -40,7 +40,7 @@ class ScalarTracer final : public Tracer {
     KernelArgs a;
     a.accel = config_.accel;
     a.data = &data_;
-    a.counts = scene_.Counts();
+    a.ranges = scene_.Ranges();
     a.spheres = scene_.spheres.data();
     a.triangles = scene_.triangles.data();
     a.cones = scene_.cones.data();
@@ -54,7 +54,7 @@ class ScalarTracer final : public Tracer {
       fn_(a, r.begin(), r.end(), occlusion, wantStats ? &local.local() : nullptr);
     });
     if (wantStats)
-      for (const auto& s : local) stats->Add(s);
+      for (const auto& s : local) AddStats(*stats, s);
   }
 
   std::string DeviceName() const override { return "cpu"; }

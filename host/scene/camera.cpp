@@ -1,4 +1,4 @@
-#include "scene/camera.h"
+#include "host/scene/camera.h"
 
 #include <cmath>
 

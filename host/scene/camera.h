@@ -7,7 +7,7 @@
 #include <glm/glm.hpp>
 
 #include "kernels/types.h"
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 

@@ -1,12 +1,12 @@
-#include "scene/generate.h"
+#include "host/scene/generate.h"
 
 #include <cmath>
 #include <cstdio>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
 
 namespace cr {
 

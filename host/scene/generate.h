@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 

@@ -15,9 +15,9 @@
 #include <fmt/format.h>
 #include <tiny_obj_loader.h>
 
-#include "core/error.h"
-#include "core/file_util.h"
-#include "scene/scene.h"
+#include "host/core/error.h"
+#include "host/core/file_util.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 

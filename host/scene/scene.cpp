@@ -1,12 +1,12 @@
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 #include <algorithm>
 #include <filesystem>
 
 #include <fmt/format.h>
 
-#include "core/error.h"
-#include "scene/triangulate.h"
+#include "host/core/error.h"
+#include "host/scene/triangulate.h"
 
 namespace cr {
 
@@ -27,12 +27,13 @@ std::uint32_t Scene::NumUnified() const
   return static_cast<std::uint32_t>(spheres.size() + triangles.size() + cones.size());
 }
 
-PrimCounts Scene::Counts() const
+PrimRanges Scene::Ranges() const
 {
-  PrimCounts c{};
-  c.nSpheres = static_cast<uint>(spheres.size());
-  c.nTriangles = static_cast<uint>(triangles.size());
-  c.nCones = static_cast<uint>(cones.size());
+  PrimRanges c{};
+  c.begin[CR_PRIM_SPHERE] = 0u;
+  c.begin[CR_PRIM_TRIANGLE] = static_cast<uint>(spheres.size());
+  c.begin[CR_PRIM_CONE] = c.begin[CR_PRIM_TRIANGLE] + static_cast<uint>(triangles.size());
+  c.begin[CR_NUM_PRIM_TYPES] = c.begin[CR_PRIM_CONE] + static_cast<uint>(cones.size());
   return c;
 }
 

@@ -97,7 +97,7 @@ struct Scene {
 
   std::uint32_t NumPrims() const { return static_cast<std::uint32_t>(prims.size()); }
   std::uint32_t NumUnified() const;
-  PrimCounts Counts() const;
+  PrimRanges Ranges() const;
   // Primitive id of unified index g (spheres, then triangles, then cones).
   std::uint32_t IdOfUnified(std::uint32_t g) const;
   // Scene-file id of every unified index, in order.

@@ -1,4 +1,4 @@
-#include "scene/surface.h"
+#include "host/scene/surface.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,11 +14,11 @@ double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(st
 
 SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v)
 {
-  const PrimCounts c = scene.Counts();
+  const PrimRanges c = scene.Ranges();
   SurfacePoint sp;
   glm::dvec3 p, ng, ns;
   double scale = 0.0;
-  if (g < c.nSpheres) {
+  if (g < Prim_End(&c, CR_PRIM_SPHERE)) {
     const Sphere& s = scene.spheres[g];
     const glm::dvec3 center = D3(s.center);
     glm::dvec3 rel = pApprox - center;
@@ -27,8 +27,8 @@ SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pA
     p = center + double(s.radius) * ng;
     ns = ng;
     scale = MaxAbs(center) + s.radius;
-  } else if (g < c.nSpheres + c.nTriangles) {
-    const std::uint32_t ti = g - c.nSpheres;
+  } else if (g < Prim_End(&c, CR_PRIM_TRIANGLE)) {
+    const std::uint32_t ti = Prim_Local(&c, CR_PRIM_TRIANGLE, g);
     const Triangle& t = scene.triangles[ti];
     const glm::dvec3 a = D3(t.v0), b = D3(t.v1), cc = D3(t.v2);
     p = (1.0 - u - v) * a + u * b + v * cc;
@@ -41,7 +41,7 @@ SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pA
     }
     scale = std::max(MaxAbs(a), std::max(MaxAbs(b), MaxAbs(cc)));
   } else {
-    const Cone& cn = scene.cones[g - c.nSpheres - c.nTriangles];
+    const Cone& cn = scene.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
     const glm::dvec3 base = D3(cn.base), apex = D3(cn.apex);
     glm::dvec3 w = apex - base;
     const double H = glm::length(w);

@@ -28,7 +28,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene/scene.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 

@@ -1,4 +1,4 @@
-#include "scene/triangulate.h"
+#include "host/scene/triangulate.h"
 
 #include <cmath>
 

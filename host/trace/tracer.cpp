@@ -1,4 +1,4 @@
-#include "trace/tracer.h"
+#include "host/trace/tracer.h"
 
 #include <chrono>
 
@@ -9,11 +9,20 @@
 
 #include <cstdlib>
 
-#include "cl/cl_device.h"
-#include "core/error.h"
-#include "reference/reference.h"
+#include "host/cl/cl_device.h"
+#include "host/core/error.h"
+#include "host/reference/reference.h"
 
 namespace cr {
+
+void AddStats(TraceStatsSum& sum, const TraceStatsSum& s)
+{
+  sum.rays += s.rays;
+  sum.nIT += s.nIT;
+  sum.nTS += s.nTS;
+  sum.nLeaves += s.nLeaves;
+  sum.nEmptyLeaves += s.nEmptyLeaves;
+}
 
 Backend ParseBackend(const std::string& s)
 {

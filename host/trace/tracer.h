@@ -10,10 +10,11 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "accel/accel.h"
+#include "host/trace/stats.h"
+#include "host/accel/accel.h"
 #include "kernels/types.h"
-#include "scene/camera.h"
-#include "scene/scene.h"
+#include "host/scene/camera.h"
+#include "host/scene/scene.h"
 
 namespace cr {
 
@@ -53,23 +54,6 @@ struct TraceConfig {
   // creation or in any later call, switches the tracer to simd with a
   // one-line warning and repeats the call there, instead of ending the run.
   bool fallbackToSimd = false;
-};
-
-// Sums of the per-ray measures over a batch.
-struct TraceStatsSum {
-  std::uint64_t rays = 0;
-  std::uint64_t nIT = 0;
-  std::uint64_t nTS = 0;
-  std::uint64_t nLeaves = 0;
-  std::uint64_t nEmptyLeaves = 0;
-  void Add(const TraceStatsSum& o)
-  {
-    rays += o.rays;
-    nIT += o.nIT;
-    nTS += o.nTS;
-    nLeaves += o.nLeaves;
-    nEmptyLeaves += o.nEmptyLeaves;
-  }
 };
 
 class Tracer {

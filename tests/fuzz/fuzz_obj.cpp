@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <string_view>
 
-#include "fuzz_util.h"
+#include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***)
 {

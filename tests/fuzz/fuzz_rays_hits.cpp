@@ -7,9 +7,9 @@
 #include <cstring>
 #include <string_view>
 
-#include "core/file_util.h"
-#include "fuzz_util.h"
-#include "io/rays_io.h"
+#include "host/core/file_util.h"
+#include "tests/fuzz/fuzz_util.h"
+#include "host/io/rays_io.h"
 
 namespace {
 

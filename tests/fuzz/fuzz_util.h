@@ -15,8 +15,8 @@
 #include <string>
 #include <string_view>
 
-#include "core/error.h"
-#include "scene/scene.h"
+#include "host/core/error.h"
+#include "host/scene/scene.h"
 
 namespace cr::fuzz {
 

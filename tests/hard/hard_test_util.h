@@ -1,4 +1,4 @@
-// Shared by the hard-case tests: runs cases of the suite (bench/hard.h) on
+// Shared by the hard-case tests: runs cases of the suite (tests/hard/gen/hard.h) on
 // every structure x backend x precision available here and asserts 0 wrong
 // rays for every required combination (robust and fp64), reporting fast's
 // counts without asserting them.
@@ -13,8 +13,8 @@
 
 #include <doctest/doctest.h>
 
-#include "bench/hard.h"
-#include "core/error.h"
+#include "tests/hard/gen/hard.h"
+#include "host/core/error.h"
 
 namespace cr::hard_test {
 

@@ -1,10 +1,10 @@
-// Hard cases, cell boundaries (bench/hard_gen_cells.cpp): rays on the cell
+// Hard cases, cell boundaries (tests/hard/gen/hard_gen_cells.cpp): rays on the cell
 // planes of the structure under test.
 #include <algorithm>
 
-#include "bench/hard_cases.h"
-#include "bench/hard_gen.h"
-#include "hard_test_util.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 
@@ -22,7 +22,7 @@ TEST_CASE("hard: cell-boundary rays lie on the built structure's own planes")
     if (s.name == "cells/planes-edges-corners") spec = &s;
   REQUIRE(spec != nullptr);
   CHECK(spec->perAccel);
-  for (AccelKind accel : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH}) {
+  for (AccelKind accel : kAccelKinds) {
     INFO(AccelKindName(accel));
     const hard::HardCase c = spec->make(accel, quick);
     const hard::Planes planes = hard::PlanesOf(BuildAccel(*c.scene, accel, c.params));

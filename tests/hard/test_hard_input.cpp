@@ -1,7 +1,7 @@
 // Hard cases on input: degenerate primitives and extreme structure
-// parameters (bench/hard_gen_input.cpp).
-#include "bench/hard_cases.h"
-#include "hard_test_util.h"
+// parameters (tests/hard/gen/hard_gen_input.cpp).
+#include "tests/hard/gen/hard_cases.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 

@@ -1,9 +1,9 @@
-// Hard cases, leaks: rays from inside closed meshes (bench/hard_gen_leaks.cpp).
+// Hard cases, leaks: rays from inside closed meshes (tests/hard/gen/hard_gen_leaks.cpp).
 #include <array>
 #include <set>
 
-#include "bench/hard_cases.h"
-#include "hard_test_util.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 

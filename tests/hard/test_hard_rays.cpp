@@ -1,11 +1,11 @@
 // Hard cases on ray directions and magnitudes: axis-parallel and near-axis
 // rays, tiny and far spheres, grazing rays, huge primitives seen from nearby
-// (bench/hard_gen_axis.cpp, hard_gen_tinyfar.cpp, hard_gen_grazing.cpp,
+// (tests/hard/gen/hard_gen_axis.cpp, hard_gen_tinyfar.cpp, hard_gen_grazing.cpp,
 // hard_gen_huge.cpp).
 #include <cmath>
 
-#include "bench/hard_cases.h"
-#include "hard_test_util.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 

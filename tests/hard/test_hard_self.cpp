@@ -1,10 +1,10 @@
-// Hard cases, self-intersection (bench/hard_gen_self.cpp): secondary rays
+// Hard cases, self-intersection (tests/hard/gen/hard_gen_self.cpp): secondary rays
 // from scene/surface.h OffsetRayOrigin must not find their own surface.
 #include <cmath>
 
-#include "bench/hard_cases.h"
-#include "reference/reference.h"
-#include "hard_test_util.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "host/reference/reference.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 

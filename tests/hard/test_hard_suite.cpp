@@ -2,8 +2,8 @@
 // it does see the fast mode fail, and its report lists every case.
 #include <string>
 
-#include "bench/hard_cases.h"
-#include "hard_test_util.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "tests/hard/hard_test_util.h"
 
 using namespace cr;
 

@@ -1,6 +1,6 @@
 // The octree kernels of one ISA, packet and single-ray: every type set x
-// precision x statistics. The including unit defines CR_SIMD_NS and
-// CR_SIMD_WIDTH and is compiled with that ISA's flags.
+// precision x statistics. Compiled once per ISA (simd/CMakeLists.txt), with
+// the ISA namespace and width of simd/vec.h.
 #include "simd/octree_packet.h"
 #include "simd/octree_single.h"
 

@@ -1,4 +1,4 @@
-#include "bench/hard_cases.h"
+#include "tests/hard/gen/hard_cases.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,10 +8,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "bench/hard_gen.h"
-#include "core/error.h"
-#include "reference/check.h"
-#include "reference/reference.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "host/core/error.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
 
 namespace cr::hard {
 

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "accel/accel.h"
-#include "trace/tracer.h"
+#include "host/accel/accel.h"
+#include "host/trace/tracer.h"
 
 namespace cr {
 

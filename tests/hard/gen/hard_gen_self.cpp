@@ -9,9 +9,9 @@
 // reference, so the rays do not depend on the tracer under test.
 #include <cmath>
 
-#include "bench/hard_gen.h"
-#include "reference/reference.h"
-#include "scene/surface.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "host/reference/reference.h"
+#include "host/scene/surface.h"
 
 namespace cr::hard {
 

@@ -23,7 +23,7 @@
 // are held to 0 like every other case.
 #include <cmath>
 
-#include "bench/hard_gen.h"
+#include "tests/hard/gen/hard_gen.h"
 
 namespace cr::hard {
 

@@ -21,8 +21,8 @@
 #include <array>
 #include <cmath>
 
-#include "bench/hard_gen.h"
-#include "reference/reference.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "host/reference/reference.h"
 
 namespace cr::hard {
 
@@ -41,14 +41,14 @@ std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec,
   const ref::RefHit h = tr.Intersect(r);
   if (!h.Found()) return kAnyPrim;
   const Scene& scene = tr.GetScene();
-  const PrimCounts n = scene.Counts();
+  const PrimRanges n = scene.Ranges();
   const glm::dvec3 p = r.o + h.t * r.d;
   const double c = std::fabs(glm::dot(tr.GeometricNormal(h.g, p), glm::normalize(r.d)));
   if (c < minCos) return kAnyPrim;
-  if (h.g >= n.nSpheres && h.g < n.nSpheres + n.nTriangles) {
+  if (Prim_Is(&n, CR_PRIM_TRIANGLE, h.g)) {
     if (std::min({h.u, h.v, 1.0 - h.u - h.v}) < edgeFrac) return kAnyPrim;
-  } else if (h.g >= n.nSpheres + n.nTriangles) {
-    const Cone& cn = scene.cones[h.g - n.nSpheres - n.nTriangles];
+  } else if (h.g >= n.begin[CR_PRIM_CONE]) {
+    const Cone& cn = scene.cones[Prim_Local(&n, CR_PRIM_CONE, h.g)];
     const glm::dvec3 b = D(cn.base), w = D(cn.apex) - b;
     const double s = glm::dot(p - b, w) / glm::dot(w, w);
     if (s < edgeFrac || s > 1.0 - edgeFrac) return kAnyPrim;

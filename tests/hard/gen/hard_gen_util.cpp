@@ -3,9 +3,9 @@
 
 #include <fmt/format.h>
 
-#include "bench/hard_gen.h"
-#include "core/error.h"
-#include "reference/reference.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "host/core/error.h"
+#include "host/reference/reference.h"
 
 namespace cr::hard {
 

@@ -1,6 +1,6 @@
 // The packet kernels of one ISA: every type set x precision x statistics.
-// The including unit defines CR_SIMD_NS and CR_SIMD_WIDTH and is compiled
-// with that ISA's flags (see simd/CMakeLists.txt).
+// Compiled once per ISA (simd/CMakeLists.txt), with the ISA namespace and
+// width of simd/vec.h.
 #include "simd/bvh_packet.h"
 
 namespace cr::simd::CR_SIMD_NS {

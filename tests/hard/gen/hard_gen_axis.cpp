@@ -7,7 +7,7 @@
 // inf in float, and a device may flush them to zero).
 #include <cmath>
 
-#include "bench/hard_gen.h"
+#include "tests/hard/gen/hard_gen.h"
 
 namespace cr::hard {
 

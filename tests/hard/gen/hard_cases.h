@@ -1,6 +1,6 @@
 // The numerically hard cases (the "hard cases" issue): generated scenes and
 // ray sets, each with an exact expectation per ray, run by the test suite
-// (tests/hard/) and reported by RunHardSuite (bench/hard.h).
+// (tests/hard/) and reported by RunHardSuite (tests/hard/gen/hard.h).
 //
 // A case is a named generator: a scene and rays produced by code from fixed
 // seeds (no files), and the rule every answer must satisfy. The rules are
@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "accel/accel.h"
+#include "host/accel/accel.h"
 #include "kernels/types.h"
-#include "scene/scene.h"
-#include "trace/tracer.h"
+#include "host/scene/scene.h"
+#include "host/trace/tracer.h"
 
 namespace cr::ref {
 class ReferenceTracer;

@@ -13,9 +13,9 @@
 
 #include <glm/glm.hpp>
 
-#include "accel/accel.h"
-#include "bench/hard_cases.h"
-#include "scene/scene.h"
+#include "host/accel/accel.h"
+#include "tests/hard/gen/hard_cases.h"
+#include "host/scene/scene.h"
 
 namespace cr::hard {
 

@@ -17,8 +17,8 @@
 
 #include <fmt/format.h>
 
-#include "bench/hard_gen.h"
-#include "core/error.h"
+#include "tests/hard/gen/hard_gen.h"
+#include "host/core/error.h"
 
 namespace cr::hard {
 

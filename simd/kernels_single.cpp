@@ -1,7 +1,7 @@
 // The single-ray kernels of one ISA (every type set x precision x
-// statistics) and the probes the unit tests call. The including unit defines
-// CR_SIMD_NS, CR_SIMD_WIDTH (N, children per node) and CR_SIMD_PACK_WIDTH
-// (K, primitives per pack) and is compiled with that ISA's flags.
+// statistics) and the probes the unit tests call. Compiled once per ISA
+// (simd/CMakeLists.txt), with the ISA namespace, CR_SIMD_WIDTH (N, children
+// per node) and CR_SIMD_PACK_WIDTH (K, primitives per pack) of simd/vec.h.
 #include "simd/bvh_packet.h"
 #include "simd/bvh_single.h"
 
@@ -66,7 +66,7 @@ void ProbeSinglePrimsT(const KernelScene& sc, const RayRecord& rec, const std::u
   const Ray ray = PreparedRay(rec);
   PackRay<K> pr;
   PackRay_Init<K>(pr, ray);
-  const PrimCounts& c = sc.counts;
+  const PrimRanges& c = sc.ranges;
   SpherePack<K> sp{};
   TrianglePack<K> tp{};
   ConePack<K> cp{};
@@ -80,7 +80,7 @@ void ProbeSinglePrimsT(const KernelScene& sc, const RayRecord& rec, const std::u
       for (int i = 0; i < 3; ++i) sp.center[i][l] = sc.spheres[g].center[i];
       sp.radius[l] = sc.spheres[g].radius;
     } else if (type == PrimType::Triangle) {
-      const Triangle& t = sc.triangles[g - c.nSpheres];
+      const Triangle& t = sc.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
       for (int i = 0; i < 3; ++i) {
         tp.v[0][i][l] = t.v0[i];
         tp.v[1][i][l] = t.v1[i];
@@ -88,7 +88,7 @@ void ProbeSinglePrimsT(const KernelScene& sc, const RayRecord& rec, const std::u
       }
       tp.flags[l] = t.flags;
     } else {
-      const ConeData& d = sc.cones[g - c.nSpheres - c.nTriangles];
+      const ConeData& d = sc.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
       for (int i = 0; i < 3; ++i) {
         cp.base[i][l] = d.base[i];
         cp.w[i][l] = d.w[i];
@@ -133,7 +133,7 @@ void ProbeSinglePrimsT(const KernelScene& sc, const RayRecord& rec, const std::u
                                    vfloat<K>::Load(cp.k), pr.tmin, tmax, t, [&](int l) -> const Cone* {
                                      const std::uint32_t g = tp.g[l];
                                      return Pack_Valid<K>(tp.g).Bits() >> l & 1u
-                                                ? &sc.coneGeometry[g - c.nSpheres - c.nTriangles]
+                                                ? &sc.coneGeometry[Prim_Local(&c, CR_PRIM_CONE, g)]
                                                 : nullptr;
                                    });
   }

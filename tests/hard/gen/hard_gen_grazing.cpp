@@ -10,7 +10,7 @@
 // says it is hit or marginal, else the backstop: never a miss, never NaN.
 #include <cmath>
 
-#include "bench/hard_gen.h"
+#include "tests/hard/gen/hard_gen.h"
 
 namespace cr::hard {
 

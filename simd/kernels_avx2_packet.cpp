@@ -1,4 +1,0 @@
-// The packet kernels for AVX2 (compiled with -mavx2 -mfma).
-#define CR_SIMD_NS avx2
-#define CR_SIMD_WIDTH 8
-#include "simd/packet_instance.inc"
