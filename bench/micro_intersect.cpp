@@ -20,6 +20,10 @@ typedef float real;
 #include "kernels/intersect.h"
 }  // namespace cr::micro_robust
 #undef CELLRAY_KERNELS_INTERSECT_H
+#undef CELLRAY_KERNELS_NUMERIC_H
+#undef CELLRAY_KERNELS_SPHERE_H
+#undef CELLRAY_KERNELS_TRIANGLE_H
+#undef CELLRAY_KERNELS_CONE_H
 #undef CELLRAY_KERNELS_RAY_H
 #define CR_FAST 1
 namespace cr::micro_fast {
@@ -28,6 +32,10 @@ typedef float real;
 }  // namespace cr::micro_fast
 #undef CR_FAST
 #undef CELLRAY_KERNELS_INTERSECT_H
+#undef CELLRAY_KERNELS_NUMERIC_H
+#undef CELLRAY_KERNELS_SPHERE_H
+#undef CELLRAY_KERNELS_TRIANGLE_H
+#undef CELLRAY_KERNELS_CONE_H
 #undef CELLRAY_KERNELS_RAY_H
 #define CR_FP64 1
 namespace cr::micro_fp64 {

@@ -25,6 +25,10 @@ typedef float real;
 #include "kernels/intersect.h"
 }  // namespace cr::simd_oracle_robust
 #undef CELLRAY_KERNELS_INTERSECT_H
+#undef CELLRAY_KERNELS_NUMERIC_H
+#undef CELLRAY_KERNELS_SPHERE_H
+#undef CELLRAY_KERNELS_TRIANGLE_H
+#undef CELLRAY_KERNELS_CONE_H
 #undef CELLRAY_KERNELS_RAY_H
 #define CR_FAST 1
 namespace cr::simd_oracle_fast {
