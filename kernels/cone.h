@@ -4,6 +4,10 @@
 #define CELLRAY_KERNELS_CONE_H
 #include "numeric.h"
 
+#ifndef CR_HAS_CONE
+#define CR_HAS_CONE 1
+#endif
+
 #if !defined(CR_FAST) && !defined(CR_FP64)
 /* Sphere_NeedsDf's rule for a cone (Cone_Intersect), or o - base much longer than its radial part
  * oR (a long cone seen from beside its middle: oR carries the rounding of
@@ -178,4 +182,24 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
   }
   return 0;
 }
+/* The uniform form of the dispatch (CR_PRIM_TYPES): no barycentrics. */
+CR_FUNC int Cone_Test(const Ray* r, const Cone* cn, real tmin, real tmax, real* tHit, real* u, real* v)
+{
+  (void)u;
+  (void)v;
+  return Cone_Intersect(r, cn, tmin, tmax, tHit);
+}
+/* A copy of a cone in global memory (field by field). */
+CR_FUNC Cone Cone_Load(CR_GLOBAL const Cone* p)
+{
+  Cone c;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    c.base[a] = p->base[a];
+    c.apex[a] = p->apex[a];
+  }
+  c.baseRadius = p->baseRadius;
+  c.apexRadius = p->apexRadius;
+  return c;
+}
+
 #endif /* CELLRAY_KERNELS_CONE_H */

@@ -11,27 +11,18 @@
  *   CR_FAST  `fast`: Moller-Trumbore with a fixed determinant epsilon, the
  *            textbook quadratic, plain slab tests;
  *   CR_FP64  `fp64`: the robust algorithms with real = double.
- * Model only what the scene needs: CR_HAS_SPHERES / CR_HAS_TRIANGLES /
- * CR_HAS_CONES (default 1) remove the code of absent primitive types. */
+ * Model only what the scene needs: CR_HAS_SPHERE, CR_HAS_TRIANGLE, ...
+ * (kernels/types.h, default 1) remove the code of absent primitive types. */
 #ifndef CELLRAY_KERNELS_INTERSECT_H
 #define CELLRAY_KERNELS_INTERSECT_H
 #include "ray.h"
 
-#ifndef CR_HAS_SPHERES
-#define CR_HAS_SPHERES 1
-#endif
-#ifndef CR_HAS_TRIANGLES
-#define CR_HAS_TRIANGLES 1
-#endif
-#ifndef CR_HAS_CONES
-#define CR_HAS_CONES 1
-#endif
 
 /* The primitive arrays of a scene, unified index g as in types.h. */
 typedef struct {
-  CR_GLOBAL const Sphere* spheres;
-  CR_GLOBAL const Triangle* triangles;
-  CR_GLOBAL const Cone* cones;
+#define CR_PRIM_ARRAY(T, U, array) CR_GLOBAL const T* array;
+  CR_PRIM_TYPES(CR_PRIM_ARRAY)
+#undef CR_PRIM_ARRAY
   PrimRanges ranges;
 } PrimView;
 
@@ -46,7 +37,7 @@ typedef struct {
  * other tie to the lower id. */
 CR_FUNC int Hit_CloserOn(const PrimView* pv, const Ray* r, real t, uint g, const Hit* h)
 {
-#if CR_HAS_SPHERES && !defined(CR_FAST) && !defined(CR_FP64)
+#if CR_HAS_SPHERE && !defined(CR_FAST) && !defined(CR_FP64)
   if (t == h->t && g != h->g && Prim_Is(&pv->ranges, CR_PRIM_SPHERE, g) && Prim_Is(&pv->ranges, CR_PRIM_SPHERE, h->g)) {
     const Sphere a = pv->spheres[g];
     const Sphere b = pv->spheres[h->g];
@@ -68,25 +59,15 @@ CR_FUNC_HOT int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hi
 {
   real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
   int found = 0;
-#if CR_HAS_SPHERES
-  /* In type order: each test below knows g is past the types above. */
-  if (g < Prim_End(&pv->ranges, CR_PRIM_SPHERE)) {
-    const Sphere s = pv->spheres[Prim_Local(&pv->ranges, CR_PRIM_SPHERE, g)];
-    found = Sphere_Intersect(r, &s, r->tmin, hit->t, &t);
-  } else
-#endif
-#if CR_HAS_TRIANGLES
-      if (g < Prim_End(&pv->ranges, CR_PRIM_TRIANGLE)) {
-    const Triangle tri = pv->triangles[Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, g)];
-    found = Triangle_Intersect(r, &tri, r->tmin, hit->t, &t, &u, &v);
-  } else
-#endif
-  {
-#if CR_HAS_CONES
-    const Cone cn = pv->cones[Prim_Local(&pv->ranges, CR_PRIM_CONE, g)];
-    found = Cone_Intersect(r, &cn, r->tmin, hit->t, &t);
-#endif
-  }
+  /* In type order: each test below knows g is past the types above; no
+   * code for the types the kernel is not built for. */
+#define CR_PRIM_TEST(T, U, array)                                     \
+  CR_IF(U, if (g < Prim_End(&pv->ranges, CR_PRIM_##U)) {              \
+    const T p = pv->array[Prim_Local(&pv->ranges, CR_PRIM_##U, g)];   \
+    found = T##_Test(r, &p, r->tmin, hit->t, &t, &u, &v);             \
+  } else)
+  CR_PRIM_TYPES(CR_PRIM_TEST) {}
+#undef CR_PRIM_TEST
   if (found && Hit_CloserOn(pv, r, t, g, hit)) {
     hit->t = t;
     hit->u = u;

@@ -97,40 +97,6 @@ CR_FUNC int Packet_Commit(const PrimView* pv, const Ray* ray, Hit* hit, int want
 /* Private copies of a primitive, field by field: a struct copy becomes a
  * memcpy, or a load of the whole struct as one vector, either of which
  * keeps the work-item loop vectoriser from widening the step. */
-CR_FUNC Sphere Packet_LoadSphere(CR_GLOBAL const Sphere* p)
-{
-  Sphere s;
-  CR_UNROLL for (int a = 0; a < 3; ++a) s.center[a] = p->center[a];
-  s.radius = p->radius;
-  return s;
-}
-
-CR_FUNC Triangle Packet_LoadTriangle(CR_GLOBAL const Triangle* p)
-{
-  Triangle t;
-  CR_UNROLL for (int a = 0; a < 3; ++a) {
-    t.v0[a] = p->v0[a];
-    t.v1[a] = p->v1[a];
-    t.v2[a] = p->v2[a];
-  }
-  t.flags = p->flags; /* CR_TRI_LONG_*: robust mode checks those edges */
-  t.pad1 = 0u;
-  t.pad2 = 0u;
-  return t;
-}
-
-CR_FUNC Cone Packet_LoadCone(CR_GLOBAL const Cone* p)
-{
-  Cone c;
-  CR_UNROLL for (int a = 0; a < 3; ++a) {
-    c.base[a] = p->base[a];
-    c.apex[a] = p->apex[a];
-  }
-  c.baseRadius = p->baseRadius;
-  c.apexRadius = p->apexRadius;
-  return c;
-}
-
 /* Tests primitive g (a valid index) against the lane's ray and hit, as
  * Prim_Intersect does, without keeping the result: 1 with t, u, v when the
  * ray meets it within [tmin, hit.t]. One branch per primitive type, each
@@ -142,24 +108,13 @@ CR_FUNC int Packet_PrimTest(const PrimView* pv, uint g, const Ray* ray, const Hi
   *t = (real)0.0f;
   *u = (real)0.0f;
   *v = (real)0.0f;
-#if CR_HAS_SPHERES
-  if (Prim_Is(&pv->ranges, CR_PRIM_SPHERE, g)) {
-    const Sphere prim = Packet_LoadSphere(pv->spheres + Prim_Local(&pv->ranges, CR_PRIM_SPHERE, g));
-    found = Sphere_Intersect(ray, &prim, ray->tmin, hit->t, t);
-  }
-#endif
-#if CR_HAS_TRIANGLES
-  if (Prim_Is(&pv->ranges, CR_PRIM_TRIANGLE, g)) {
-    const Triangle prim = Packet_LoadTriangle(pv->triangles + Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, g));
-    found = Triangle_Intersect(ray, &prim, ray->tmin, hit->t, t, u, v);
-  }
-#endif
-#if CR_HAS_CONES
-  if (Prim_Is(&pv->ranges, CR_PRIM_CONE, g)) {
-    const Cone prim = Packet_LoadCone(pv->cones + Prim_Local(&pv->ranges, CR_PRIM_CONE, g));
-    found = Cone_Intersect(ray, &prim, ray->tmin, hit->t, t);
-  }
-#endif
+#define CR_PACKET_TEST(T, U, array)                                                  \
+  CR_IF(U, if (Prim_Is(&pv->ranges, CR_PRIM_##U, g)) {                               \
+    const T prim = T##_Load(pv->array + Prim_Local(&pv->ranges, CR_PRIM_##U, g));    \
+    found = T##_Test(ray, &prim, ray->tmin, hit->t, t, u, v);                        \
+  })
+  CR_PRIM_TYPES(CR_PACKET_TEST)
+#undef CR_PACKET_TEST
   return found;
 }
 

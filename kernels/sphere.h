@@ -5,6 +5,10 @@
 #define CELLRAY_KERNELS_SPHERE_H
 #include "numeric.h"
 
+#ifndef CR_HAS_SPHERE
+#define CR_HAS_SPHERE 1
+#endif
+
 #if !defined(CR_FAST) && !defined(CR_FP64)
 /* The sphere's |f x d|^2 in float carries two errors: the products that
  * cancel in each component (about u |f| |d| each), and f = o - c itself,
@@ -201,6 +205,23 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
     return 1;
   }
   return 0;
+}
+
+/* The uniform form of the dispatch (CR_PRIM_TYPES): no barycentrics. */
+CR_FUNC int Sphere_Test(const Ray* r, const Sphere* s, real tmin, real tmax, real* tHit, real* u, real* v)
+{
+  (void)u;
+  (void)v;
+  return Sphere_Intersect(r, s, tmin, tmax, tHit);
+}
+/* A copy of a sphere in global memory (field by field, as the packet
+ * kernels' vectorisers prefer). */
+CR_FUNC Sphere Sphere_Load(CR_GLOBAL const Sphere* p)
+{
+  Sphere s;
+  CR_UNROLL for (int a = 0; a < 3; ++a) s.center[a] = p->center[a];
+  s.radius = p->radius;
+  return s;
 }
 
 #endif /* CELLRAY_KERNELS_SPHERE_H */

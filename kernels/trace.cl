@@ -2,7 +2,7 @@
  * host (host/cl/cl_options.cpp) compiles it with options derived from the
  * scene and the query, so that only what they need is modelled:
  *   CR_FP64 | CR_FAST                 precision (intersect.h); default robust
- *   CR_HAS_SPHERES, CR_HAS_TRIANGLES, CR_HAS_CONES = 0|1
+ *   CR_HAS_SPHERE, CR_HAS_TRIANGLE, CR_HAS_CONE = 0|1 (kernels/types.h CR_IF)
  *                                     primitive types present (default 1)
  *   CR_ACCEL_BVH | CR_ACCEL_GRID | CR_ACCEL_OCTREE
  *                                     the one traversal compiled; none: all

@@ -5,6 +5,10 @@
 #define CELLRAY_KERNELS_TRIANGLE_H
 #include "numeric.h"
 
+#ifndef CR_HAS_TRIANGLE
+#define CR_HAS_TRIANGLE 1
+#endif
+
 #if !defined(CR_FAST) && !defined(CR_FP64)
 /* The distance to the triangle's plane in double-float, from the exact edges
  * v1 - v0, v2 - v0 and the exact v0 - o: the cold path of Triangle_Intersect
@@ -261,6 +265,26 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   *vHit = W * invDet;
   return 1;
 #endif
+}
+
+/* The uniform form of the dispatch (CR_PRIM_TYPES). */
+CR_FUNC int Triangle_Test(const Ray* r, const Triangle* tri, real tmin, real tmax, real* tHit, real* uHit, real* vHit)
+{
+  return Triangle_Intersect(r, tri, tmin, tmax, tHit, uHit, vHit);
+}
+/* A copy of a triangle in global memory (field by field). */
+CR_FUNC Triangle Triangle_Load(CR_GLOBAL const Triangle* p)
+{
+  Triangle t;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    t.v0[a] = p->v0[a];
+    t.v1[a] = p->v1[a];
+    t.v2[a] = p->v2[a];
+  }
+  t.flags = p->flags; /* CR_TRI_LONG_*: robust mode checks those edges */
+  t.pad1 = 0u;
+  t.pad2 = 0u;
+  return t;
 }
 
 #endif /* CELLRAY_KERNELS_TRIANGLE_H */

@@ -71,12 +71,28 @@ typedef struct {
   float apexRadius;
 } Cone;
 
-/* Primitive types in unified-index order. A new type goes last, so that the
- * primitives of existing scenes keep their g (ties go to the lower g). */
+/* The primitive types, one entry each, in unified-index order:
+ * X(Type, UPPER, array): the layout `Type` (below), its index constant
+ * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
+ * Type_Load, a copy from global memory) in kernels/<type>.h. A new type goes
+ * last, so that the primitives of existing scenes keep their g (ties go to
+ * the lower g). The device code and its dispatch are generated from this
+ * list (kernels/intersect.h, packet.cl). */
+#define CR_PRIM_TYPES(X) X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
 #define CR_NUM_PRIM_TYPES 3u
+/* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
+ * 1, in the type's header; an OpenCL program is built with only its
+ * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
+ * keeps the code only for a type the kernel is built for, so that the
+ * generated dispatch compiles nothing of an absent type. */
+#define CR_CAT_(a, b) a##b
+#define CR_CAT(a, b) CR_CAT_(a, b)
+#define CR_IF_1(...) __VA_ARGS__
+#define CR_IF_0(...)
+#define CR_IF(U, ...) CR_CAT(CR_IF_, CR_HAS_##U)(__VA_ARGS__)
 
 /* Where each type's unified indices begin: type k holds [begin[k],
  * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives.

@@ -99,8 +99,8 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.stats) o += " -DCR_STATS";
   o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
   if (!s.generic) {
-    o += fmt::format(" -DCR_HAS_SPHERES={} -DCR_HAS_TRIANGLES={} -DCR_HAS_CONES={}", int(s.spheres),
-                     int(s.triangles), int(s.cones));
+    o += fmt::format(" -DCR_HAS_SPHERE={} -DCR_HAS_TRIANGLE={} -DCR_HAS_CONE={}", int(s.spheres), int(s.triangles),
+                     int(s.cones));
     switch (s.accel) {
       case AccelKind::BVH: o += " -DCR_ACCEL_BVH"; break;
       case AccelKind::Grid: o += " -DCR_ACCEL_GRID"; break;
