@@ -14,7 +14,10 @@ answers then has the count of differing records in each row).
 
 Run it on a quiet machine: the ratio of two noisy medians is noisier still,
 so --rounds repeats the whole alternation and the best median of each build
-is kept.
+is kept. A configuration may name a traversal variant (simd:grid:packet,
+opencl:bvh:ray): without one, the simd backend's `auto` picks packets or
+single rays by a timed pilot, and two builds can pick differently on the
+same rays, which then times the choice rather than the kernels.
 """
 import argparse
 import math
@@ -54,7 +57,8 @@ def main():
                 run(gen)
                 occ = ["--occlusion"] if kind == "shadow" else []
                 for cfg in a.configs.split(","):
-                    backend, accel = cfg.split(":")
+                    backend, accel, *variant = cfg.split(":")
+                    var = ["--variant", variant[0]] if variant else []
                     best = {}
                     hits = {}
                     for _ in range(a.rounds):
@@ -62,7 +66,7 @@ def main():
                             out = os.path.join(tmp, f"{name}.hits")
                             r = run([binary, "trace", path, "--rays", rays, "--accel", accel, "--backend", backend,
                                      "--precision", a.precision, "--repeat", str(a.repeat), "--threads",
-                                     str(a.threads), "-o", out] + occ)
+                                     str(a.threads), "-o", out] + occ + var)
                             best[name] = min(best.get(name, float("inf")), r["trace_ms"])
                             with open(out, "rb") as f:
                                 hits[name] = f.read()
