@@ -5,7 +5,7 @@
  * Unified primitive index g: the device stores one array per primitive type and
  * numbers them back to back in type order (CR_PRIM_SPHERE, CR_PRIM_TRIANGLE,
  * CR_PRIM_CONE): type k holds [begin[k], begin[k + 1]) of PrimRanges, and
- * nothing else computes these offsets (Prim_TypeOf, Prim_Local). References
+ * nothing else computes these offsets (Prim_Is, Prim_Local). References
  * in leaves and cells are such indices, sorted ascending inside each leaf or
  * cell, so they come grouped by type. primIds[g] is the scene-file primitive
  * id of ../shared/FORMATS.md.
@@ -101,13 +101,6 @@ typedef struct {
   uint begin[CR_NUM_PRIM_TYPES + 1u];
 } PrimRanges;
 
-/* The type of unified index g (g below the total). */
-CR_FUNC uint Prim_TypeOf(const PrimRanges* r, uint g)
-{
-  uint k = 0u;
-  while (k + 1u < CR_NUM_PRIM_TYPES && g >= r->begin[k + 1u]) ++k;
-  return k;
-}
 /* Whether g is of type k, and its index in that type's array. */
 CR_FUNC int Prim_Is(const PrimRanges* r, uint k, uint g) { return g >= r->begin[k] && g < r->begin[k + 1u]; }
 CR_FUNC uint Prim_Local(const PrimRanges* r, uint k, uint g) { return g - r->begin[k]; }
