@@ -1,7 +1,8 @@
 /* Ray-primitive intersection, shared by every structure and backend: the
  * primitive arrays of a scene (PrimView), the test of unified index g
  * (Prim_Intersect), the tie rule and hit records. Each type's test is in its
- * own header (sphere.h, triangle.h, cone.h; shared numerics in numeric.h).
+ * own header, included below in CR_PRIM_TYPES order (shared numerics in
+ * numeric.h).
  *
  * Precision modes (macros):
  *   default  `robust`: watertight triangles (Woop, Benthin & Wald 2013), the

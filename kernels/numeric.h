@@ -1,5 +1,5 @@
-/* Numerics shared by the primitive tests (kernels/sphere.h, triangle.h,
- * cone.h): the stable quadratic, and in robust mode the error-free
+/* Numerics shared by the primitive tests (each type's kernels/<type>.h):
+ * the stable quadratic, and in robust mode the error-free
  * transformations and double-float arithmetic of their cold paths. */
 #ifndef CELLRAY_KERNELS_NUMERIC_H
 #define CELLRAY_KERNELS_NUMERIC_H

@@ -2,8 +2,8 @@
  * host (host/cl/cl_options.cpp) compiles it with options derived from the
  * scene and the query, so that only what they need is modelled:
  *   CR_FP64 | CR_FAST                 precision (intersect.h); default robust
- *   CR_HAS_SPHERE, CR_HAS_TRIANGLE, CR_HAS_CONE = 0|1 (kernels/types.h CR_IF)
- *                                     primitive types present (default 1)
+ *   CR_HAS_<TYPE> = 0|1               primitive types present (default 1;
+ *                                     kernels/types.h CR_PRIM_TYPES, CR_IF)
  *   CR_ACCEL_BVH | CR_ACCEL_GRID | CR_ACCEL_OCTREE
  *                                     the one traversal compiled; none: all
  *                                     three, chosen by the `accel` argument
@@ -81,11 +81,14 @@ typedef float4 camreal4;
 #define CR_ACCEL_ARG_BVH 2
 
 /* The scene and structure arguments of every kernel, in binding order
- * (host/cl/cl_tracer.cpp binds them by these positions, 0..17). */
+ * (host/cl/cl_tracer.cpp binds them by these positions): for each primitive
+ * type of CR_PRIM_TYPES its array and its count (arguments 2k and 2k + 1),
+ * then the primitive ids and the structures. */
+#define CR_PRIM_PARAM_(T, U, a) CR_GLOBAL const T *a, uint a##Count,
+#define CR_PRIM_ARG_(T, U, a) a, a##Count,
 #define CR_SCENE_PARAMS                                                                                         \
-  CR_GLOBAL const Sphere *spheres, CR_GLOBAL const Triangle *triangles, CR_GLOBAL const Cone *cones,             \
-      CR_GLOBAL const uint *primIds, uint nSpheres, uint nTriangles, uint nCones,                                \
-      CR_GLOBAL const BVHNode *bvhNodes, CR_GLOBAL const uint *bvhRefs, CR_GLOBAL const GridHeader *grid,        \
+  CR_PRIM_TYPES(CR_PRIM_PARAM_)                                                                                \
+  CR_GLOBAL const uint *primIds, CR_GLOBAL const BVHNode *bvhNodes, CR_GLOBAL const uint *bvhRefs, CR_GLOBAL const GridHeader *grid,        \
       CR_GLOBAL const uint *cellStart, CR_GLOBAL const uint *gridRefs, CR_GLOBAL const OctreeHeader *octree,     \
       CR_GLOBAL const OctreeNode *octNodes, CR_GLOBAL const uint *octRefs, int accel, int anyHitArg, int unifiedArg
 
@@ -100,17 +103,19 @@ typedef float4 camreal4;
 #define CR_QUERY_UNIFIED unifiedArg
 #endif
 
-CR_FUNC PrimView Trace_PrimView(CR_GLOBAL const Sphere* spheres, CR_GLOBAL const Triangle* triangles,
-                                CR_GLOBAL const Cone* cones, uint nSpheres, uint nTriangles, uint nCones)
+/* The arrays and their ranges of unified indices, from the arguments
+ * (Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0)). */
+#define CR_PRIM_VIEW_SET_(T, U, a) \
+  pv.a = a;                        \
+  pv.ranges.begin[CR_PRIM_##U] = n; \
+  n += a##Count;
+CR_FUNC PrimView Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_PARAM_) int unused)
 {
   PrimView pv;
-  pv.spheres = spheres;
-  pv.triangles = triangles;
-  pv.cones = cones;
-  pv.ranges.begin[CR_PRIM_SPHERE] = 0u;
-  pv.ranges.begin[CR_PRIM_TRIANGLE] = nSpheres;
-  pv.ranges.begin[CR_PRIM_CONE] = nSpheres + nTriangles;
-  pv.ranges.begin[CR_NUM_PRIM_TYPES] = nSpheres + nTriangles + nCones;
+  uint n = 0u;
+  (void)unused;
+  CR_PRIM_TYPES(CR_PRIM_VIEW_SET_)
+  pv.ranges.begin[CR_NUM_PRIM_TYPES] = n;
   return pv;
 }
 
@@ -215,7 +220,7 @@ __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint 
 {
   const uint i = (uint)get_global_id(0);
   if (i >= nRays) return;
-  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
   const RayRecord rec = Trace_LoadRay(rays, i);
   Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
 }
@@ -232,7 +237,7 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   const int px = (int)get_global_id(0), py = (int)get_global_id(1);
   if (px >= width || py >= height) return;
   const uint i = (uint)py * (uint)width + (uint)px;
-  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, px, py, width, height);
   Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
 }
@@ -347,7 +352,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_
   const uint i = (uint)get_global_id(0);
   const uint lid = (uint)get_local_id(0);
   const int live = i < nRays;
-  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
   const RayRecord rec = Trace_LoadRay(rays, live ? i : 0);
   TraceStats st = {0, 0, 0, 0};
   const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
@@ -370,7 +375,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
   const int px = (int)get_global_id(0), py = (int)get_global_id(1);
   const uint lid = (uint)get_local_id(1) * CR_PACKET_W + (uint)get_local_id(0);
   const int live = px < width && py < height;
-  const PrimView pv = Trace_PrimView(spheres, triangles, cones, nSpheres, nTriangles, nCones);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, live ? px : 0, live ? py : 0, width, height);
   TraceStats st = {0, 0, 0, 0};
   const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);

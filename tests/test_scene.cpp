@@ -45,10 +45,10 @@ TEST_CASE("SPD scenes load with the published primitive counts")
   for (const SpdCounts& c : kSpd) {
     const Scene& s = test::CachedScene(test::SpdPath(c.name));
     INFO(c.name);
-    CHECK(s.CountKind(PrimKind::kSphere) == c.spheres);
-    CHECK(s.CountKind(PrimKind::kCone) == c.cones);
-    CHECK(s.CountKind(PrimKind::kPolygon) == c.polygons);
-    CHECK(s.CountKind(PrimKind::kPatch) == c.patches);
+    CHECK(s.CountKind(PrimKind::kShape, CR_PRIM_SPHERE) == c.spheres);
+    CHECK(s.CountKind(PrimKind::kShape, CR_PRIM_CONE) == c.cones);
+    CHECK(s.CountKind(PrimKind::kPolygon, CR_PRIM_TRIANGLE) == c.polygons);
+    CHECK(s.CountKind(PrimKind::kPatch, CR_PRIM_TRIANGLE) == c.patches);
     CHECK(s.lights.size() == c.lights);
     CHECK(s.NumPrims() == c.spheres + c.cones + c.polygons + c.patches);
     // No SPD primitive is degenerate: every statement has geometry.
@@ -178,18 +178,18 @@ TEST_CASE("NFF statements: lights with colour, cones, negative radii, patches, i
   CHECK(s.lights[0].color == glm::vec3(1.0f));
   CHECK(s.lights[1].color == glm::vec3(0.5f, 0.25f, 1.0f));
   REQUIRE(s.NumPrims() == 6);
-  CHECK(s.prims[0].kind == PrimKind::kSphere);
+  CHECK((s.prims[0].kind == PrimKind::kShape && s.prims[0].type == CR_PRIM_SPHERE));
   CHECK(s.prims[0].insideVisible);
   CHECK(s.spheres[0].radius == 1.0f);
-  CHECK(s.prims[1].kind == PrimKind::kCone);
+  CHECK((s.prims[1].kind == PrimKind::kShape && s.prims[1].type == CR_PRIM_CONE));
   CHECK(s.cones[0].apexRadius == 0.25f);
   CHECK(s.prims[2].nPieces == 0);  // degenerate polygon keeps id 2
   CHECK(s.prims[3].kind == PrimKind::kPatch);
   CHECK(s.prims[4].nPieces == 0);  // zero-radius sphere keeps id 4
   CHECK(s.prims[5].nPieces == 2);
-  CHECK(s.triangleIds == std::vector<std::uint32_t>{3, 5, 5});
-  CHECK(s.sphereIds == std::vector<std::uint32_t>{0});
-  CHECK(s.coneIds == std::vector<std::uint32_t>{1});
+  CHECK(s.pieceIds[CR_PRIM_TRIANGLE] == std::vector<std::uint32_t>{3, 5, 5});
+  CHECK(s.pieceIds[CR_PRIM_SPHERE] == std::vector<std::uint32_t>{0});
+  CHECK(s.pieceIds[CR_PRIM_CONE] == std::vector<std::uint32_t>{1});
   REQUIRE(s.HasPatchNormals());
   CHECK(s.triNormals[0][0] == glm::vec3(0, 0, 1));
   // The patch has a vertex at the origin: its two edges from there are long

@@ -1,7 +1,7 @@
 // Uniform grid builder. Resolution after Woo (Graphics Gems, "Ray tracing
 // polygons using spatial subdivision") and Klimaszewski: about lambda * N
 // cells, cubic as far as the scene box allows. Each primitive goes into every
-// cell its shape overlaps (prim_overlap.h), in two parallel passes over the
+// cell its shape overlaps (host/prims/), in two parallel passes over the
 // primitives (count, then fill) into the compressed row layout of GridHeader
 // (types.h), references sorted ascending in each cell.
 #include <algorithm>
@@ -15,7 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "host/accel/accel.h"
-#include "host/accel/prim_overlap.h"
+#include "host/prims/prim_host.h"
 #include "host/core/error.h"
 
 namespace cr {

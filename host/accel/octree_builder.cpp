@@ -4,11 +4,8 @@
 // are built in parallel with oneTBB and flattened into the layout of
 // kernels/types.h (OctreeNode: non-empty children contiguous, in octant order).
 //
-// Insertion tests the exact shape against the cell where it is cheap
-// (triangles: separating axes after Akenine-Moller 2001, "Fast 3D
-// triangle-box overlap testing"; spheres: the hollow-sphere case of Arvo 1990,
-// "A simple method for box-sphere intersection testing"; cones: their
-// bounding box), in double, against the cell grown by kCellPadRel of the
+// Insertion tests each type's shape against the cell (its OverlapsBox,
+// host/prims/: exact where it is cheap, conservative otherwise), in double, against the cell grown by kCellPadRel of the
 // scene's coordinate magnitude: the traversal computes cell parameters in
 // float from rounded planes, so the t it attributes to a cell may differ by a
 // few ulps of the coordinates from the exact one; a primitive that meets the
@@ -25,7 +22,7 @@
 #include <tbb/parallel_for.h>
 
 #include "host/accel/accel.h"
-#include "host/accel/prim_overlap.h"
+#include "host/prims/prim_host.h"
 #include "host/core/error.h"
 
 namespace cr {
@@ -206,7 +203,7 @@ class Builder {
     }
   }
 
-  // The exact-shape tests shared with the grid (accel/prim_overlap.h).
+  // The exact-shape tests shared with the grid (OverlapsBox, host/prims/).
   bool Overlaps(std::uint32_t g, const DBox& cell) const
   {
     return PrimOverlapsBox(scene_, g, glm::dvec3(cell.lo[0], cell.lo[1], cell.lo[2]),

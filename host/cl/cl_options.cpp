@@ -63,9 +63,8 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
   s.stats = config.stats;
   s.cameraFp64 = dev.fp64;
   if (!s.generic) {
-    s.spheres = !scene.spheres.empty();
-    s.triangles = !scene.triangles.empty();
-    s.cones = !scene.cones.empty();
+    s.types = 0;
+    scene.ForEachType([&](const auto& pieces, std::uint32_t k) { s.types |= pieces.empty() ? 0u : 1u << k; });
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
   // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was
@@ -99,8 +98,9 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.stats) o += " -DCR_STATS";
   o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
   if (!s.generic) {
-    o += fmt::format(" -DCR_HAS_SPHERE={} -DCR_HAS_TRIANGLE={} -DCR_HAS_CONE={}", int(s.spheres), int(s.triangles),
-                     int(s.cones));
+#define CR_HAS_OPTION_(T, U, a) o += fmt::format(" -DCR_HAS_" #U "={}", (s.types >> CR_PRIM_##U) & 1u);
+    CR_PRIM_TYPES(CR_HAS_OPTION_)
+#undef CR_HAS_OPTION_
     switch (s.accel) {
       case AccelKind::BVH: o += " -DCR_ACCEL_BVH"; break;
       case AccelKind::Grid: o += " -DCR_ACCEL_GRID"; break;

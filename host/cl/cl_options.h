@@ -5,6 +5,7 @@
 // comparison.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -17,7 +18,7 @@ enum class ClVariant { Ray, Packet };
 
 struct ClProgramSpec {
   bool generic = false;          // all primitive types and structures, query by argument
-  bool spheres = true, triangles = true, cones = true;
+  std::uint32_t types = ~0u;     // bit k: the program has primitive type k (CR_PRIM_*)
   AccelKind accel = AccelKind::BVH;
   bool anyHit = false;
   bool unified = false;

@@ -14,6 +14,7 @@
 #include "host/cl/cl_options.h"
 #include "host/cl/cl_program.h"
 #include "host/core/error.h"
+#include "host/prims/prim_host.h"
 #include "host/trace/tracer.h"
 
 namespace cr {
@@ -21,15 +22,10 @@ namespace cr {
 namespace {
 
 // Positions of the kernel arguments (kernels/trace.cl CR_SCENE_PARAMS and
-// the kernels' own parameters after them).
+// the kernels' own parameters after them): type k's array at 2k, its count
+// at 2k + 1, then the primitive ids and the structures.
 enum SceneArg : cl_uint {
-  kArgSpheres,
-  kArgTriangles,
-  kArgCones,
-  kArgPrimIds,
-  kArgNSpheres,
-  kArgNTriangles,
-  kArgNCones,
+  kArgPrimIds = 2 * CR_NUM_PRIM_TYPES,
   kArgBvhNodes,
   kArgBvhRefs,
   kArgGrid,
@@ -287,13 +283,11 @@ class ClTracer final : public Tracer {
   void BindScene(cl::Kernel& k, const char* name)
   {
     const PrimRanges r = scene_.Ranges();
-    SetArg(k, kArgSpheres, spheres_, name);
-    SetArg(k, kArgTriangles, triangles_, name);
-    SetArg(k, kArgCones, cones_, name);
+    for (cl_uint t = 0; t < CR_NUM_PRIM_TYPES; ++t) {
+      SetArg(k, 2 * t, prims_[t], name);
+      SetArg(k, 2 * t + 1, cl_uint(Prim_Count(&r, t)), name);
+    }
     SetArg(k, kArgPrimIds, primIds_, name);
-    SetArg(k, kArgNSpheres, cl_uint(Prim_Count(&r, CR_PRIM_SPHERE)), name);
-    SetArg(k, kArgNTriangles, cl_uint(Prim_Count(&r, CR_PRIM_TRIANGLE)), name);
-    SetArg(k, kArgNCones, cl_uint(Prim_Count(&r, CR_PRIM_CONE)), name);
     SetArg(k, kArgBvhNodes, bvhNodes_, name);
     SetArg(k, kArgBvhRefs, bvhRefs_, name);
     SetArg(k, kArgGrid, gridHeader_, name);
@@ -335,9 +329,9 @@ class ClTracer final : public Tracer {
   {
     dummy_ = ClUpload(cl_, "placeholder", nullptr, 0);
     const std::vector<std::uint32_t> ids = scene_.UnifiedIds();
-    spheres_ = ClUpload(cl_, "spheres", scene_.spheres.data(), scene_.spheres.size() * sizeof(Sphere));
-    triangles_ = ClUpload(cl_, "triangles", scene_.triangles.data(), scene_.triangles.size() * sizeof(Triangle));
-    cones_ = ClUpload(cl_, "cones", scene_.cones.data(), scene_.cones.size() * sizeof(Cone));
+    scene_.ForEachType([&](const auto& pieces, std::uint32_t t) {
+      prims_[t] = ClUpload(cl_, PrimTypeName(t), pieces.data(), pieces.size() * sizeof(pieces[0]));
+    });
     primIds_ = ClUpload(cl_, "primitive ids", ids.data(), ids.size() * sizeof(std::uint32_t));
     bvhNodes_ = bvhRefs_ = gridHeader_ = cellStart_ = gridRefs_ = octHeader_ = octNodes_ = octRefs_ = dummy_;
     switch (d.kind) {
@@ -401,7 +395,7 @@ class ClTracer final : public Tracer {
   bool generic_ = false;
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
-  cl::Buffer dummy_, spheres_, triangles_, cones_, primIds_;
+  cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_;
   cl::Buffer bvhNodes_, bvhRefs_, gridHeader_, cellStart_, gridRefs_, octHeader_, octNodes_, octRefs_;
   cl::Buffer rayBuf_, hitBuf_, statsBuf_;
   std::size_t rayCapacity_ = 0, hitCapacity_ = 0;

@@ -5,14 +5,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <type_traits>
 
 #include <fmt/format.h>
 
 #include "host/core/error.h"
 #include "kernels/types.h"
 
-// Our float cone test (kernels/intersect.h, robust mode) for the user
-// geometry: the same arithmetic as the scalar backend's.
+// Our float tests (kernels/, robust mode) for the user geometries: the same
+// arithmetic as the scalar backend's.
 namespace cr::embree_kernels {
 typedef float real;
 #include "kernels/intersect.h"
@@ -20,13 +21,22 @@ typedef float real;
 
 namespace cr::embree {
 
-// User data of the cone geometry: the cones in place and their boxes.
-struct ConeUser {
-  const Cone* cones = nullptr;
+// User data of a user geometry: its primitives in place and their boxes.
+struct UserGeometry {
+  const void* prims = nullptr;
   std::vector<RTCBounds> bounds;
 };
 
 namespace {
+
+// The kernels' uniform test of each type, by overload.
+#define CR_EMBREE_TEST_(T, U, a)                                                                                 \
+  inline int KernelTest(const embree_kernels::Ray* r, const T* p, float tmin, float tmax, float* t, float* u, float* v) \
+  {                                                                                                              \
+    return embree_kernels::T##_Test(r, p, tmin, tmax, t, u, v);                                                 \
+  }
+CR_PRIM_TYPES(CR_EMBREE_TEST_)
+#undef CR_EMBREE_TEST_
 
 const char* ErrorName(RTCError code)
 {
@@ -42,14 +52,14 @@ const char* ErrorName(RTCError code)
   return "error";
 }
 
-void ConeBounds(const RTCBoundsFunctionArguments* args)
+void UserBounds(const RTCBoundsFunctionArguments* args)
 {
-  const auto* user = static_cast<const ConeUser*>(args->geometryUserPtr);
+  const auto* user = static_cast<const UserGeometry*>(args->geometryUserPtr);
   *args->bounds_o = user->bounds[args->primID];
 }
 
 // Lane i of a packet (N = 1 for rtcIntersect1) as the kernels' Ray: only the
-// origin and direction are read by Cone_Intersect.
+// origin and direction are read by the tests.
 embree_kernels::Ray LaneRay(RTCRayN* ray, unsigned N, unsigned i)
 {
   embree_kernels::Ray r{};
@@ -62,23 +72,24 @@ embree_kernels::Ray LaneRay(RTCRayN* ray, unsigned N, unsigned i)
   return r;
 }
 
-void ConeIntersect(const RTCIntersectFunctionNArguments* args)
+template <class T>
+void UserIntersect(const RTCIntersectFunctionNArguments* args)
 {
-  const auto* user = static_cast<const ConeUser*>(args->geometryUserPtr);
-  const Cone cone = user->cones[args->primID];
+  const auto* user = static_cast<const UserGeometry*>(args->geometryUserPtr);
+  const T prim = static_cast<const T*>(user->prims)[args->primID];
   const unsigned N = args->N;
   RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, N);
   RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, N);
   for (unsigned i = 0; i < N; ++i) {
     if (args->valid[i] != -1) continue;
     const embree_kernels::Ray r = LaneRay(ray, N, i);
-    float t = 0.0f;
-    if (!embree_kernels::Cone_Intersect(&r, &cone, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t)) continue;
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    if (!KernelTest(&r, &prim, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, &u, &v)) continue;
     RTCRayN_tfar(ray, N, i) = t;
     RTCHitN_geomID(hit, N, i) = args->geomID;
     RTCHitN_primID(hit, N, i) = args->primID;
-    RTCHitN_u(hit, N, i) = 0.0f;
-    RTCHitN_v(hit, N, i) = 0.0f;
+    RTCHitN_u(hit, N, i) = u;
+    RTCHitN_v(hit, N, i) = v;
     // The geometric normal is not used by the bench or the renderer's
     // embree path (hits are mapped back to our primitives).
     RTCHitN_Ng_x(hit, N, i) = 0.0f;
@@ -88,18 +99,18 @@ void ConeIntersect(const RTCIntersectFunctionNArguments* args)
   }
 }
 
-void ConeOccluded(const RTCOccludedFunctionNArguments* args)
+template <class T>
+void UserOccluded(const RTCOccludedFunctionNArguments* args)
 {
-  const auto* user = static_cast<const ConeUser*>(args->geometryUserPtr);
-  const Cone cone = user->cones[args->primID];
+  const auto* user = static_cast<const UserGeometry*>(args->geometryUserPtr);
+  const T prim = static_cast<const T*>(user->prims)[args->primID];
   auto* octx = reinterpret_cast<OccluderContext*>(args->context);
   const unsigned N = args->N;
   for (unsigned i = 0; i < N; ++i) {
     if (args->valid[i] != -1) continue;
     const embree_kernels::Ray r = LaneRay(args->ray, N, i);
-    float t = 0.0f;
-    if (!embree_kernels::Cone_Intersect(&r, &cone, RTCRayN_tnear(args->ray, N, i), RTCRayN_tfar(args->ray, N, i), &t))
-      continue;
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    if (!KernelTest(&r, &prim, RTCRayN_tnear(args->ray, N, i), RTCRayN_tfar(args->ray, N, i), &t, &u, &v)) continue;
     RTCRayN_tfar(args->ray, N, i) = -INFINITY;
     if (i < octx->lanes && octx->occluder[i] == CR_NO_HIT) octx->occluder[i] = octx->base[args->geomID] + args->primID;
   }
@@ -154,8 +165,6 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
     rtcSetSceneFlags(scene_, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);  // Embree's default
     const PrimRanges r = scene.Ranges();
-    const std::uint32_t nSpheres = Prim_Count(&r, CR_PRIM_SPHERE), nTriangles = Prim_Count(&r, CR_PRIM_TRIANGLE),
-                        nCones = Prim_Count(&r, CR_PRIM_CONE);
     std::uint32_t geomID = 0;
     auto attach = [&](RTCGeometry geom, std::uint32_t base, const char* what) {
       rtcCommitGeometry(geom);
@@ -166,50 +175,53 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
       base_.push_back(base);
       ++geomID;
     };
-    if (nSpheres > 0) {
-      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-      // Sphere is {centre[3], radius}: Embree's FLOAT4 point layout as is.
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, scene.spheres.data(), 0,
-                                 sizeof(Sphere), nSpheres);
-      rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
-      attach(g, 0, "sphere geometry");
-    }
-    if (nTriangles > 0) {
-      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-      // Triangle holds v0, v1, v2 each in 16 bytes (xyz and a 4-byte field):
-      // a vertex buffer of stride 16 read in place, vertex 3i + k being vk of
-      // piece i; the last vertex is followed by its pad, so Embree's 16-byte
-      // loads stay inside the array.
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, scene.triangles.data(), 0, 16,
-                                 std::size_t(nTriangles) * 3);
-      indices_.resize(std::size_t(nTriangles) * 3);
-      for (std::size_t i = 0; i < indices_.size(); ++i) indices_[i] = static_cast<std::uint32_t>(i);
-      rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
-                                 3 * sizeof(std::uint32_t), nTriangles);
-      rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
-      attach(g, r.begin[CR_PRIM_TRIANGLE], "triangle geometry");
-    }
-    if (nCones > 0) {
-      cones_ = std::make_unique<ConeUser>();
-      cones_->cones = scene.cones.data();
-      cones_->bounds.resize(nCones);
-      for (std::uint32_t i = 0; i < nCones; ++i) {
-        const Bounds b = scene.UnifiedBounds(r.begin[CR_PRIM_CONE] + i);
-        // A few ulps of slack: the float test may report a point a rounding
-        // error outside the exact surface's box.
-        const float pad = 1e-6f * std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z), std::fabs(b.hi.x),
-                                            std::fabs(b.hi.y), std::fabs(b.hi.z), 1e-30f});
-        cones_->bounds[i] = RTCBounds{b.lo.x - pad, b.lo.y - pad, b.lo.z - pad, 0.0f,
-                                           b.hi.x + pad, b.hi.y + pad, b.hi.z + pad, 0.0f};
+    scene.ForEachType([&](const auto& pieces, std::uint32_t k) {
+      using T = typename std::decay_t<decltype(pieces)>::value_type;
+      const auto n = static_cast<unsigned>(pieces.size());
+      if (n == 0) return;
+      if constexpr (std::is_same_v<T, Sphere>) {
+        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+        // Sphere is {centre[3], radius}: Embree's FLOAT4 point layout as is.
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, pieces.data(), 0, sizeof(Sphere), n);
+        rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
+        attach(g, r.begin[k], "sphere geometry");
+      } else if constexpr (std::is_same_v<T, Triangle>) {
+        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Triangle holds v0, v1, v2 each in 16 bytes (xyz and a 4-byte field):
+        // a vertex buffer of stride 16 read in place, vertex 3i + k being vk of
+        // piece i; the last vertex is followed by its pad, so Embree's 16-byte
+        // loads stay inside the array.
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, pieces.data(), 0, 16,
+                                   std::size_t(n) * 3);
+        indices_.resize(std::size_t(n) * 3);
+        for (std::size_t i = 0; i < indices_.size(); ++i) indices_[i] = static_cast<std::uint32_t>(i);
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
+                                   3 * sizeof(std::uint32_t), n);
+        rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
+        attach(g, r.begin[k], "triangle geometry");
+      } else {
+        auto user = std::make_unique<UserGeometry>();
+        user->prims = pieces.data();
+        user->bounds.resize(n);
+        for (std::uint32_t i = 0; i < n; ++i) {
+          const Bounds b = scene.UnifiedBounds(r.begin[k] + i);
+          // A few ulps of slack: the float test may report a point a rounding
+          // error outside the exact surface's box.
+          const float pad = 1e-6f * std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z),
+                                              std::fabs(b.hi.x), std::fabs(b.hi.y), std::fabs(b.hi.z), 1e-30f});
+          user->bounds[i] = RTCBounds{b.lo.x - pad, b.lo.y - pad, b.lo.z - pad, 0.0f,
+                                      b.hi.x + pad, b.hi.y + pad, b.hi.z + pad, 0.0f};
+        }
+        RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(g, n);
+        rtcSetGeometryUserData(g, user.get());
+        rtcSetGeometryBoundsFunction(g, &UserBounds, nullptr);
+        rtcSetGeometryIntersectFunction(g, &UserIntersect<T>);
+        rtcSetGeometryOccludedFunction(g, &UserOccluded<T>);
+        users_.push_back(std::move(user));
+        attach(g, r.begin[k], "user geometry");
       }
-      RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
-      rtcSetGeometryUserPrimitiveCount(g, nCones);
-      rtcSetGeometryUserData(g, cones_.get());
-      rtcSetGeometryBoundsFunction(g, &ConeBounds, nullptr);
-      rtcSetGeometryIntersectFunction(g, &ConeIntersect);
-      rtcSetGeometryOccludedFunction(g, &ConeOccluded);
-      attach(g, r.begin[CR_PRIM_CONE], "cone user geometry");
-    }
+    });
     empty_ = geomID == 0;
     rtcCommitScene(scene_);
     ThrowIfFailed("scene commit");

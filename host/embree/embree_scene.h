@@ -8,10 +8,10 @@
 //    polygon or patch being one triangle; Embree's barycentrics u, v have the
 //    meaning of ours (u weights v1, v weights v2);
 //  - spheres as RTC_GEOMETRY_TYPE_SPHERE_POINT (Embree's ray-sphere test);
-//  - open cones and cylinders (NFF `c`) as user geometry that calls our own
-//    float Cone_Intersect (kernels/intersect.h, robust mode): Embree's curves
-//    are swept circles along a spline, not the same surface, and have no
-//    open truncated cone.
+//  - every other type (kernels/types.h CR_PRIM_TYPES) as user geometry that
+//    calls our own float test, Type_Test in robust mode (kernels/<type>.h):
+//    Embree's own shapes beyond these two are not ours (its curves are
+//    swept circles along a spline, for one).
 // Occlusion queries must report *some* occluder (FORMATS.md), which Embree's
 // rtcOccluded does not: an occlusion filter on each geometry records the
 // first accepted hit's g in the query context (OccluderContext).
@@ -40,7 +40,7 @@ struct OccluderContext {
   unsigned lanes;             // entries of occluder
 };
 
-struct ConeUser;
+struct UserGeometry;
 
 struct EmbreeOptions {
   bool robust = false;  // RTC_SCENE_FLAG_ROBUST (Embree's watertight, slower mode)
@@ -69,7 +69,7 @@ class EmbreeScene {
   RTCScene scene_ = nullptr;
   std::vector<std::uint32_t> base_;      // by geomID
   std::vector<std::uint32_t> indices_;   // triangle index buffer (3 per piece)
-  std::unique_ptr<ConeUser> cones_;       // user data of the cone geometry
+  std::vector<std::unique_ptr<UserGeometry>> users_;  // user data of the user geometries
   std::atomic<std::int64_t> monitored_{0};
   std::uint64_t bytes_ = 0;
   double buildMs_ = 0.0;

@@ -8,11 +8,12 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "host/prims/prim_host.h"
+
 namespace cr::ref {
 
 namespace {
 
-double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
 
 // The tolerance of check.h at t: the ray's magnitudes up to t, nothing of
 // the scene or the primitive.
@@ -71,77 +72,33 @@ bool PossiblyMeets(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r,
   return false;
 }
 
-// Parameter s in [0, 1] of the point of segment p1 + s (q1 - p1) closest to
-// segment p2 q2 (Ericson, Real-Time Collision Detection 5.1.9).
-double ClosestOnSegment(const glm::dvec3& p1, const glm::dvec3& q1, const glm::dvec3& p2, const glm::dvec3& q2)
-{
-  const glm::dvec3 d1 = q1 - p1, d2 = q2 - p2, rr = p1 - p2;
-  const double a = glm::dot(d1, d1), e = glm::dot(d2, d2), f = glm::dot(d2, rr);
-  if (a <= 0.0) return 0.0;
-  const double c = glm::dot(d1, rr);
-  if (e <= 0.0) return std::clamp(-c / a, 0.0, 1.0);
-  const double b = glm::dot(d1, d2), denom = a * e - b * b;
-  double s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-  const double t = (b * s + f) / e;
-  if (t < 0.0) s = std::clamp(-c / a, 0.0, 1.0);
-  else if (t > 1.0) s = std::clamp((b - c) / a, 0.0, 1.0);
-  return s;
-}
-
 // Does the ray come within delta(t) of primitive `prim` somewhere in
 // [tmin - delta, tmax + delta]? The distance from a segment to a triangle
 // is smallest where the segment crosses it (MeetsPrim), at an end, or at its
 // closest approach to an edge; to a sphere at the closest approach to the
-// centre; cones are sampled at the closest approaches to their axis and end
-// points. This catches what the eight shifted rays of PossiblyMeets miss: a
+// centre; each type names its own candidates (RefNearTimes). This catches what the eight shifted rays of PossiblyMeets miss: a
 // ray through a triangle's vertex where the triangle's angle is narrower
 // than their 45-degree spacing.
 bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
 {
   const Scene& scene = tr.GetScene();
-  const PrimRanges n = scene.Ranges();
   const double dl = glm::length(r.d);
   auto delta = [&](double t) { return Delta(r, t); };
   std::vector<std::uint32_t> pieces;
   tr.PiecesOf(prim, pieces);
   for (std::uint32_t g : pieces) {
-    // The piece's points, and a bounding sphere to make the ray a segment.
-    glm::dvec3 pts[3];
-    int nPts = 0;
-    double rad = 0.0;
-    if (g < Prim_End(&n, CR_PRIM_SPHERE)) {
-      pts[nPts++] = D3(scene.spheres[g].center);
-      rad = scene.spheres[g].radius;
-    } else if (g < Prim_End(&n, CR_PRIM_TRIANGLE)) {
-      const Triangle& t = scene.triangles[Prim_Local(&n, CR_PRIM_TRIANGLE, g)];
-      pts[nPts++] = D3(t.v0);
-      pts[nPts++] = D3(t.v1);
-      pts[nPts++] = D3(t.v2);
-    } else {
-      const Cone& c = scene.cones[Prim_Local(&n, CR_PRIM_CONE, g)];
-      pts[nPts++] = D3(c.base);
-      pts[nPts++] = D3(c.apex);
-      rad = std::max(c.baseRadius, c.apexRadius);
-    }
-    glm::dvec3 mid(0.0);
-    for (int k = 0; k < nPts; ++k) mid += pts[k] / double(nPts);
-    double reach = rad;
-    for (int k = 0; k < nPts; ++k) reach = std::max(reach, glm::length(pts[k] - mid) + rad);
+    // A ball around the piece makes the ray a segment; the piece's own
+    // closest approaches (RefNearTimes, host/prims/) are sampled on it.
+    glm::dvec3 mid;
+    double reach = 0.0;
+    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefBall(piece, mid, reach); });
     const double tc = glm::dot(mid - r.o, r.d) / (dl * dl);
     const double slack = (reach + delta(tc + reach / dl) + 1e-300) / dl;
     const double t0 = std::max({0.0, r.tmin - delta(r.tmin) / dl, tc - slack});
     const double t1 = std::min(r.tmax + delta(r.tmax) / dl, tc + slack);
     if (!(t0 <= t1)) continue;
-    const glm::dvec3 a = r.o + t0 * r.d, b = r.o + t1 * r.d;
     std::vector<double> ts = {t0, t1};
-    if (g < Prim_End(&n, CR_PRIM_SPHERE)) {
-      ts.push_back(std::clamp(tc, t0, t1));
-    } else if (g < Prim_End(&n, CR_PRIM_TRIANGLE)) {
-      for (int k = 0; k < 3; ++k) ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[k], pts[(k + 1) % 3]));
-    } else {
-      ts.push_back(t0 + (t1 - t0) * ClosestOnSegment(a, b, pts[0], pts[1]));
-      for (int k = 0; k < 2; ++k) ts.push_back(std::clamp(glm::dot(pts[k] - r.o, r.d) / (dl * dl), t0, t1));
-    }
+    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefNearTimes(piece, r, t0, t1, ts); });
     for (double t : ts)
       if (tr.DistanceToPrim(prim, r.o + t * r.d) <= delta(t)) return true;
   }

@@ -24,20 +24,20 @@ DRay MakeRay(const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax)
 
 inline glm::dvec3 D3(const float* p) { return {p[0], p[1], p[2]}; }
 
-// Every root in [tmin, tmax], ascending; returns how many (0..2). Triangles
-// also return barycentrics of the first root.
-int SphereRoots(const DRay& r, const Sphere& s, double t[2]);
-int TriangleRoots(const DRay& r, const Triangle& tri, double t[1], double* u, double* v);
-int ConeRoots(const DRay& r, const Cone& c, double t[2]);
+// Real roots of a t^2 + 2 bh t + c = 0 with discriminant disc = bh^2 - a c
+// (computed by the caller without cancellation), ascending, stable (Press et
+// al.); returns 0 or 2.
+int Quadratic(double a, double bh, double c, double disc, double t[2]);
+// Keeps the roots in [tmin, tmax], in order; returns how many.
+int KeepInRange(double t[2], int n, double tmin, double tmax);
+// Parameter s in [0, 1] of the point of segment p1 + s (q1 - p1) closest to
+// segment p2 q2 (Ericson, Real-Time Collision Detection 5.1.9).
+double ClosestOnSegment(const glm::dvec3& p1, const glm::dvec3& q1, const glm::dvec3& p2, const glm::dvec3& q2);
+// A ball around points pts[0..n) thickened by rad: centre the mean of the
+// points, radius the largest distance to one plus rad.
+void BallOf(const glm::dvec3* pts, int n, double rad, glm::dvec3& mid, double& reach);
 
-// Distance from p to the surface.
-double SphereDistance(const Sphere& s, const glm::dvec3& p);
-double TriangleDistance(const Triangle& tri, const glm::dvec3& p);
-double ConeDistance(const Cone& c, const glm::dvec3& p);
-
-// Outward normal of the surface at p (unnormalised for triangles).
-glm::dvec3 SphereNormal(const Sphere& s, const glm::dvec3& p);
-glm::dvec3 TriangleNormal(const Triangle& tri);
-glm::dvec3 ConeNormal(const Cone& c, const glm::dvec3& p);
+// The primitives' own roots, distances and normals are their host
+// functions (host/prims/prim_host.h: RefRoots, RefDistance, RefNormal).
 
 }  // namespace cr::ref

@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "host/core/error.h"
+#include "host/prims/prim_host.h"
 
 namespace cr::ref {
 
@@ -15,35 +16,14 @@ constexpr std::uint32_t kLeafSize = 4;
 // slab test conservative.
 constexpr double kFarScale = 1.0 + 2.0 * (3.0 * 0x1p-53) / (1.0 - 3.0 * 0x1p-53);
 
-glm::dvec3 Down(const glm::dvec3& v) { return {std::nextafter(v.x, -INFINITY), std::nextafter(v.y, -INFINITY), std::nextafter(v.z, -INFINITY)}; }
-glm::dvec3 Up(const glm::dvec3& v) { return {std::nextafter(v.x, INFINITY), std::nextafter(v.y, INFINITY), std::nextafter(v.z, INFINITY)}; }
 }  // namespace
 
 ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), ranges_(scene.Ranges())
 {
   const std::uint32_t n = scene.NumUnified();
   std::vector<glm::dvec3> lo(n), hi(n);
-  for (std::uint32_t g = 0; g < n; ++g) {
-    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) {
-      const Sphere& s = scene.spheres[g];
-      lo[g] = Down(D3(s.center) - double(s.radius));
-      hi[g] = Up(D3(s.center) + double(s.radius));
-    } else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) {
-      const Triangle& t = scene.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)];
-      lo[g] = glm::min(D3(t.v0), glm::min(D3(t.v1), D3(t.v2)));
-      hi[g] = glm::max(D3(t.v0), glm::max(D3(t.v1), D3(t.v2)));
-    } else {
-      // Box of the two end discs, padded.
-      const Cone& c = scene.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)];
-      glm::dvec3 p0 = D3(c.base), p1 = D3(c.apex), w = glm::normalize(p1 - p0);
-      glm::dvec3 e = glm::sqrt(glm::max(glm::dvec3(1.0) - w * w, glm::dvec3(0.0)));
-      glm::dvec3 l = glm::min(p0 - e * double(c.baseRadius), p1 - e * double(c.apexRadius));
-      glm::dvec3 h = glm::max(p0 + e * double(c.baseRadius), p1 + e * double(c.apexRadius));
-      glm::dvec3 pad = (h - l) * 1e-9 + (glm::abs(l) + glm::abs(h)) * 1e-12;
-      lo[g] = l - pad;
-      hi[g] = h + pad;
-    }
-  }
+  for (std::uint32_t g = 0; g < n; ++g)
+    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefBounds(piece, lo[g], hi[g]); });
   order_.resize(n);
   std::iota(order_.begin(), order_.end(), 0u);
   nodes_.reserve(n ? 2 * n / kLeafSize + 2 : 1);
@@ -125,10 +105,7 @@ void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) con
 
 int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u, double* v) const
 {
-  if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) return SphereRoots(ray, scene_.spheres[g], t);
-  if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE))
-    return TriangleRoots(ray, scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)], t, u, v);
-  return ConeRoots(ray, scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], t);
+  return scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefRoots(ray, piece, t, u, v); });
 }
 
 RefHit ReferenceTracer::Intersect(const DRay& ray) const
@@ -183,10 +160,7 @@ void ReferenceTracer::PiecesOf(std::uint32_t prim, std::vector<std::uint32_t>& o
   out.clear();
   if (prim >= scene_.NumPrims()) return;
   const PrimInfo& info = scene_.prims[prim];
-  std::uint32_t base = 0;
-  if (info.kind == PrimKind::kSphere) base = 0;
-  else if (info.kind == PrimKind::kCone) base = ranges_.begin[CR_PRIM_CONE];
-  else base = ranges_.begin[CR_PRIM_TRIANGLE];
+  const std::uint32_t base = ranges_.begin[info.type];
   for (std::uint32_t i = 0; i < info.nPieces; ++i) out.push_back(base + info.firstPiece + i);
 }
 
@@ -196,10 +170,7 @@ double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) 
   PiecesOf(prim, pieces);
   double best = INFINITY;
   for (std::uint32_t g : pieces) {
-    double d;
-    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) d = SphereDistance(scene_.spheres[g], p);
-    else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) d = TriangleDistance(scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)], p);
-    else d = ConeDistance(scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], p);
+    const double d = scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefDistance(piece, p); });
     best = std::min(best, d);
   }
   return best;
@@ -209,28 +180,14 @@ double ReferenceTracer::PrimScale(std::uint32_t prim) const
 {
   std::vector<std::uint32_t> pieces;
   PiecesOf(prim, pieces);
-  auto m = [](const float* p) { return std::max(std::fabs(double(p[0])), std::max(std::fabs(double(p[1])), std::fabs(double(p[2])))); };
   double s = 0.0;
-  for (std::uint32_t g : pieces) {
-    if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) {
-      const Sphere& sp = scene_.spheres[g];
-      s = std::max(s, m(sp.center) + sp.radius);
-    } else if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) {
-      const Triangle& t = scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)];
-      s = std::max(s, std::max(m(t.v0), std::max(m(t.v1), m(t.v2))));
-    } else {
-      const Cone& c = scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)];
-      s = std::max(s, std::max(m(c.base) + c.baseRadius, m(c.apex) + c.apexRadius));
-    }
-  }
+  for (std::uint32_t g : pieces) s = std::max(s, scene_.Visit(g, [](const auto& piece, std::uint32_t) { return Scale(piece); }));
   return s;
 }
 
 glm::dvec3 ReferenceTracer::GeometricNormal(std::uint32_t g, const glm::dvec3& p) const
 {
-  if (g < Prim_End(&ranges_, CR_PRIM_SPHERE)) return SphereNormal(scene_.spheres[g], p);
-  if (g < Prim_End(&ranges_, CR_PRIM_TRIANGLE)) return glm::normalize(TriangleNormal(scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)]));
-  return ConeNormal(scene_.cones[Prim_Local(&ranges_, CR_PRIM_CONE, g)], p);
+  return scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefNormal(piece, p); });
 }
 
 glm::dvec3 ReferenceTracer::ShadingNormal(std::uint32_t g, const glm::dvec3& p, double u, double v) const

@@ -77,7 +77,7 @@ class Shader {
   {
     const double nl = double(std::max<std::size_t>(1, scene.lights.size()));
     intensity_ = float(std::sqrt(nl) / (2.0 * nl));
-    twoSidedOpaque_ = opt.sides == Sides::Two || (opt.sides == Sides::Auto && scene.CountKind(PrimKind::kPatch) > 0);
+    twoSidedOpaque_ = opt.sides == Sides::Two || (opt.sides == Sides::Auto && scene.CountKind(PrimKind::kPatch, CR_PRIM_TRIANGLE) > 0);
   }
 
   // Shades one hit: returns the local colour (ambient, or background on a

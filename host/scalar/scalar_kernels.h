@@ -16,9 +16,9 @@ struct KernelArgs {
   AccelKind accel = AccelKind::BVH;
   const AccelData* data = nullptr;
   PrimRanges ranges{};
-  const Sphere* spheres = nullptr;
-  const Triangle* triangles = nullptr;
-  const Cone* cones = nullptr;
+#define CR_KERNEL_ARGS_ARRAY_(T, U, array) const T* array = nullptr;  // the scene's array of each type
+  CR_PRIM_TYPES(CR_KERNEL_ARGS_ARRAY_)
+#undef CR_KERNEL_ARGS_ARRAY_
   const std::uint32_t* primIds = nullptr;  // by unified index
   const RayRecord* rays = nullptr;
   HitRecord* hits = nullptr;

@@ -41,9 +41,9 @@ class ScalarTracer final : public Tracer {
     a.accel = config_.accel;
     a.data = &data_;
     a.ranges = scene_.Ranges();
-    a.spheres = scene_.spheres.data();
-    a.triangles = scene_.triangles.data();
-    a.cones = scene_.cones.data();
+#define CR_SCALAR_ARRAY_(T, U, array) a.array = scene_.array.data();
+    CR_PRIM_TYPES(CR_SCALAR_ARRAY_)
+#undef CR_SCALAR_ARRAY_
     a.primIds = primIds_.data();
     a.rays = rays.data();
     a.hits = hits.data();

@@ -17,12 +17,10 @@ constexpr double kPi = 3.14159265358979323846;
 void AddSphere(Scene& s, const glm::dvec3& c, double r, std::uint32_t material)
 {
   PrimInfo info;
-  info.kind = PrimKind::kSphere;
+  info.type = CR_PRIM_SPHERE;
   info.material = material;
-  info.firstPiece = static_cast<std::uint32_t>(s.spheres.size());
   info.nPieces = 1;
-  s.sphereIds.push_back(s.NumPrims());
-  s.spheres.push_back(Sphere{{float(c.x), float(c.y), float(c.z)}, float(r)});
+  info.firstPiece = s.AddPiece(Sphere{{float(c.x), float(c.y), float(c.z)}, float(r)}, s.NumPrims());
   s.prims.push_back(info);
 }
 
@@ -30,8 +28,8 @@ void AddTriangle(Scene& s, const glm::dvec3& a, const glm::dvec3& b, const glm::
 {
   PrimInfo info;
   info.kind = PrimKind::kPolygon;
+  info.type = CR_PRIM_TRIANGLE;
   info.material = material;
-  info.firstPiece = static_cast<std::uint32_t>(s.triangles.size());
   info.nPieces = 1;
   Triangle t{};
   for (int k = 0; k < 3; ++k) {
@@ -40,8 +38,7 @@ void AddTriangle(Scene& s, const glm::dvec3& a, const glm::dvec3& b, const glm::
     t.v2[k] = float(c[k]);
   }
   t.flags = CR_TRI_REPORT_UV | TriangleEdgeFlags(t);
-  s.triangleIds.push_back(s.NumPrims());
-  s.triangles.push_back(t);
+  info.firstPiece = s.AddPiece(t, s.NumPrims());
   s.prims.push_back(info);
 }
 
@@ -179,7 +176,7 @@ void WriteNFF(const Scene& s, const std::string& path)
                    m.transmittance, m.ior);
         current = p.material;
       }
-      if (p.kind == PrimKind::kSphere && p.nPieces) {
+      if (p.kind == PrimKind::kShape && p.type == CR_PRIM_SPHERE && p.nPieces) {
         const Sphere& sp = s.spheres[p.firstPiece];
         fmt::print(f, "s {} {} {} {}\n", sp.center[0], sp.center[1], sp.center[2], sp.radius);
       } else if (p.kind == PrimKind::kPolygon && p.nPieces == 1) {

@@ -1,4 +1,5 @@
-// NFF (Neutral File Format, Eric Haines) reader: v, b, l, f, s, c, p, pp, #.
+// NFF (Neutral File Format, Eric Haines) reader: v, b, l, f, # here, and the
+// geometry statements (s, c, p, pp) in their types' files (host/prims/).
 // Statements are read as a token stream (so `c` may span one or two lines),
 // except the optional colour of `l`, which must be on the light's line.
 #include <charconv>
@@ -10,6 +11,8 @@
 
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/prims/prim_host.h"
+#include "host/scene/nff.h"
 #include "host/scene/scene.h"
 
 namespace cr {
@@ -133,7 +136,34 @@ glm::dvec3 Vec(Lexer& lx, const char* stmt, long line, const char* what)
 
 glm::vec3 F(const glm::dvec3& v) { return glm::vec3(v); }
 
+// A geometry statement as its type's ParseNff reads it.
+class LexerStatement final : public NffStatement {
+ public:
+  LexerStatement(Lexer& lx, std::string_view kw, long line, std::uint32_t material)
+      : NffStatement(kw, lx.Name(), line, material), lx_(lx), stmt_(kw)
+  {
+  }
+  double Number(const char* what) override { return lx_.Number(stmt_.c_str(), line, what); }
+  long Integer(const char* what) override { return lx_.Integer(stmt_.c_str(), line, what); }
+  [[noreturn]] void Fail(const std::string& what) override { lx_.Fail(line, what); }
+
+ private:
+  Lexer& lx_;
+  std::string stmt_;
+};
+
 }  // namespace
+
+void NffValues::Fail(const std::string& what) { throw InputError(file, line, what); }
+
+bool ReadGeometry(NffStatement& st, Scene& scene)
+{
+  bool read = false;
+#define CR_NFF_PARSE_(T, U, a) read = read || ParseNff(PrimTag<T>{}, st, scene);
+  CR_PRIM_TYPES(CR_NFF_PARSE_)
+#undef CR_NFF_PARSE_
+  return read;
+}
 
 void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool viewOnly)
 {
@@ -145,8 +175,7 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
     const long line = tok->line;
     const std::string_view kw = tok->text;
     anyStatement = true;
-    const bool geometry = kw == "s" || kw == "c" || kw == "p" || kw == "pp";
-    if (viewOnly && (geometry || kw == "f"))
+    if (viewOnly && kw != "v" && kw != "b" && kw != "l")
       lx.Fail(line, fmt::format("'{}' statement in a view file (only v, b, l and comments belong there)", kw));
     if (kw == "v") {
       Camera cam;
@@ -194,66 +223,10 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
       if (m.ior < 0.0f) lx.Fail(line, fmt::format("'f': index of refraction {} is negative", m.ior));
       scene.materials.push_back(m);
       material = static_cast<std::uint32_t>(scene.materials.size() - 1);
-    } else if (kw == "s") {
-      glm::dvec3 c = Vec(lx, "s", line, "a centre coordinate");
-      double r = lx.Number("s", line, "the radius");
-      PrimInfo info;
-      info.kind = PrimKind::kSphere;
-      info.material = material;
-      info.line = static_cast<std::uint32_t>(line);
-      info.insideVisible = r < 0.0;
-      const auto id = scene.NumPrims();
-      float rf = float(std::fabs(r));
-      if (rf == 0.0f) {
-        Warn(fmt::format("{}:{}: sphere of radius 0: skipped, id {} kept", name, line, id));
-      } else {
-        info.firstPiece = static_cast<std::uint32_t>(scene.spheres.size());
-        info.nPieces = 1;
-        scene.spheres.push_back(Sphere{{float(c.x), float(c.y), float(c.z)}, rf});
-        scene.sphereIds.push_back(id);
-      }
-      scene.prims.push_back(info);
-    } else if (kw == "c") {
-      glm::dvec3 b = Vec(lx, "c", line, "a base coordinate");
-      double rb = lx.Number("c", line, "the base radius");
-      glm::dvec3 a = Vec(lx, "c", line, "an apex coordinate");
-      double ra = lx.Number("c", line, "the apex radius");
-      PrimInfo info;
-      info.kind = PrimKind::kCone;
-      info.material = material;
-      info.line = static_cast<std::uint32_t>(line);
-      info.insideVisible = rb < 0.0 || ra < 0.0;
-      if ((rb < 0.0) != (ra < 0.0) && rb != 0.0 && ra != 0.0)
-        Warn(fmt::format("{}:{}: cone radii of opposite signs: treated as inside-visible", name, line));
-      const auto id = scene.NumPrims();
-      Cone cn{{float(b.x), float(b.y), float(b.z)}, float(std::fabs(rb)), {float(a.x), float(a.y), float(a.z)},
-              float(std::fabs(ra))};
-      bool sameEnds = cn.base[0] == cn.apex[0] && cn.base[1] == cn.apex[1] && cn.base[2] == cn.apex[2];
-      if (sameEnds || (cn.baseRadius == 0.0f && cn.apexRadius == 0.0f)) {
-        Warn(fmt::format("{}:{}: degenerate cone ({}): skipped, id {} kept", name, line,
-                         sameEnds ? "base and apex coincide" : "both radii are 0", id));
-      } else {
-        info.firstPiece = static_cast<std::uint32_t>(scene.cones.size());
-        info.nPieces = 1;
-        scene.cones.push_back(cn);
-        scene.coneIds.push_back(id);
-      }
-      scene.prims.push_back(info);
-    } else if (kw == "p" || kw == "pp") {
-      const bool patch = kw == "pp";
-      const char* stmt = patch ? "pp" : "p";
-      long n = lx.Integer(stmt, line, "the vertex count");
-      if (n < 0) lx.Fail(line, fmt::format("'{}': negative vertex count {}", stmt, n));
-      std::vector<glm::dvec3> verts;
-      std::vector<glm::vec3> normals;
-      for (long i = 0; i < n; ++i) {
-        verts.push_back(Vec(lx, stmt, line, "a vertex coordinate"));
-        if (patch) normals.push_back(F(Vec(lx, stmt, line, "a vertex normal component")));
-      }
-      AddPolygon(scene, patch ? PrimKind::kPatch : PrimKind::kPolygon, verts, patch ? &normals : nullptr, material,
-                 static_cast<std::uint32_t>(line), name);
     } else {
-      lx.Fail(line, fmt::format("unknown statement '{}'", kw));
+      // Geometry: the statement of some primitive type (host/prims/).
+      LexerStatement st(lx, kw, line, material);
+      if (!ReadGeometry(st, scene)) lx.Fail(line, fmt::format("unknown statement '{}'", kw));
     }
   }
   if (!anyStatement) throw InputError(name, 0, viewOnly ? "empty view file" : "empty scene file");

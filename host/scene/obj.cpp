@@ -177,6 +177,7 @@ Scene LoadOBJ(const std::string& path)
     while (fi < faces.size() && faces[fi].nVerts < 3) {
       PrimInfo info;
       info.kind = PrimKind::kFace;
+      info.type = CR_PRIM_TRIANGLE;
       info.line = faces[fi].line;
       Warn(fmt::format("{}:{}: face with {} vertices: skipped, id {} kept", path, faces[fi].line, faces[fi].nVerts,
                        scene.NumPrims()));

@@ -6,15 +6,24 @@
 #include <fmt/format.h>
 
 #include "host/core/error.h"
+#include "host/prims/prim_host.h"
 #include "host/scene/triangulate.h"
 
 namespace cr {
 
-const char* PrimKindName(PrimKind kind)
+const char* PrimTypeName(std::uint32_t k)
 {
-  switch (kind) {
-    case PrimKind::kSphere: return "sphere";
-    case PrimKind::kCone: return "cone";
+#define CR_TYPE_NAME_(T, U, a) \
+  if (k == CR_PRIM_##U) return PrimTypeName(PrimTag<T>{});
+  CR_PRIM_TYPES(CR_TYPE_NAME_)
+#undef CR_TYPE_NAME_
+  return "?";
+}
+
+const char* PrimInfoName(const PrimInfo& info)
+{
+  switch (info.kind) {
+    case PrimKind::kShape: return PrimTypeName(info.type);
     case PrimKind::kPolygon: return "polygon";
     case PrimKind::kPatch: return "patch";
     case PrimKind::kFace: return "face";
@@ -22,82 +31,39 @@ const char* PrimKindName(PrimKind kind)
   return "?";
 }
 
-std::uint32_t Scene::NumUnified() const
-{
-  return static_cast<std::uint32_t>(spheres.size() + triangles.size() + cones.size());
-}
+std::uint32_t Scene::NumUnified() const { return Ranges().begin[CR_NUM_PRIM_TYPES]; }
 
 PrimRanges Scene::Ranges() const
 {
   PrimRanges c{};
-  c.begin[CR_PRIM_SPHERE] = 0u;
-  c.begin[CR_PRIM_TRIANGLE] = static_cast<uint>(spheres.size());
-  c.begin[CR_PRIM_CONE] = c.begin[CR_PRIM_TRIANGLE] + static_cast<uint>(triangles.size());
-  c.begin[CR_NUM_PRIM_TYPES] = c.begin[CR_PRIM_CONE] + static_cast<uint>(cones.size());
+  uint n = 0;
+  ForEachType([&](const auto& pieces, std::uint32_t k) {
+    c.begin[k] = n;
+    n += static_cast<uint>(pieces.size());
+  });
+  c.begin[CR_NUM_PRIM_TYPES] = n;
   return c;
 }
 
 std::uint32_t Scene::IdOfUnified(std::uint32_t g) const
 {
-  const auto nS = static_cast<std::uint32_t>(spheres.size());
-  const auto nT = static_cast<std::uint32_t>(triangles.size());
-  if (g < nS) return sphereIds[g];
-  if (g < nS + nT) return triangleIds[g - nS];
-  return coneIds[g - nS - nT];
+  const PrimRanges r = Ranges();
+  for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
+    if (Prim_Is(&r, k, g)) return pieceIds[k][Prim_Local(&r, k, g)];
+  throw std::out_of_range("unified primitive index past the scene's primitives");
 }
 
 std::vector<std::uint32_t> Scene::UnifiedIds() const
 {
   std::vector<std::uint32_t> ids;
   ids.reserve(NumUnified());
-  ids.insert(ids.end(), sphereIds.begin(), sphereIds.end());
-  ids.insert(ids.end(), triangleIds.begin(), triangleIds.end());
-  ids.insert(ids.end(), coneIds.begin(), coneIds.end());
+  for (const auto& v : pieceIds) ids.insert(ids.end(), v.begin(), v.end());
   return ids;
 }
 
-static glm::vec3 V3(const float* p) { return {p[0], p[1], p[2]}; }
-
 Bounds Scene::UnifiedBounds(std::uint32_t g) const
 {
-  Bounds b;
-  const auto nS = static_cast<std::uint32_t>(spheres.size());
-  const auto nT = static_cast<std::uint32_t>(triangles.size());
-  if (g < nS) {
-    const Sphere& s = spheres[g];
-    glm::vec3 c = V3(s.center);
-    // Outward rounding: c +- r may round inward by half an ulp.
-    glm::vec3 r(s.radius);
-    b.lo = glm::vec3(std::nextafter(c.x - r.x, -INFINITY), std::nextafter(c.y - r.y, -INFINITY),
-                     std::nextafter(c.z - r.z, -INFINITY));
-    b.hi = glm::vec3(std::nextafter(c.x + r.x, INFINITY), std::nextafter(c.y + r.y, INFINITY),
-                     std::nextafter(c.z + r.z, INFINITY));
-  } else if (g < nS + nT) {
-    const Triangle& t = triangles[g - nS];
-    b.Extend(V3(t.v0));
-    b.Extend(V3(t.v1));
-    b.Extend(V3(t.v2));
-  } else {
-    // A cone lies inside the box of its two end discs; a disc of radius r
-    // normal to unit axis w extends r * sqrt(1 - w_i^2) along axis i.
-    const Cone& c = cones[g - nS - nT];
-    glm::dvec3 p0(c.base[0], c.base[1], c.base[2]), p1(c.apex[0], c.apex[1], c.apex[2]);
-    glm::dvec3 w = glm::normalize(p1 - p0);
-    glm::dvec3 e = glm::sqrt(glm::max(glm::dvec3(1.0) - w * w, glm::dvec3(0.0)));
-    glm::dvec3 lo = glm::min(p0 - e * double(c.baseRadius), p1 - e * double(c.apexRadius));
-    glm::dvec3 hi = glm::max(p0 + e * double(c.baseRadius), p1 + e * double(c.apexRadius));
-    // Pad by a relative epsilon and round outward to float.
-    glm::dvec3 pad = (hi - lo) * 1e-6 + glm::abs(lo) * 1e-7 + glm::abs(hi) * 1e-7;
-    lo -= pad;
-    hi += pad;
-    b.lo = glm::vec3(lo);
-    b.hi = glm::vec3(hi);
-    for (int a = 0; a < 3; ++a) {
-      if (double(b.lo[a]) > lo[a]) b.lo[a] = std::nextafter(b.lo[a], -INFINITY);
-      if (double(b.hi[a]) < hi[a]) b.hi[a] = std::nextafter(b.hi[a], INFINITY);
-    }
-  }
-  return b;
+  return Visit(g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); });
 }
 
 Bounds Scene::WorldBounds() const
@@ -108,9 +74,10 @@ Bounds Scene::WorldBounds() const
   return b;
 }
 
-std::uint32_t Scene::CountKind(PrimKind kind) const
+std::uint32_t Scene::CountKind(PrimKind kind, std::uint32_t type) const
 {
-  return static_cast<std::uint32_t>(std::count_if(prims.begin(), prims.end(), [&](const PrimInfo& p) { return p.kind == kind; }));
+  return static_cast<std::uint32_t>(
+      std::count_if(prims.begin(), prims.end(), [&](const PrimInfo& p) { return p.kind == kind && p.type == type; }));
 }
 
 namespace {
@@ -142,6 +109,7 @@ bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& vert
 {
   PrimInfo info;
   info.kind = kind;
+  info.type = CR_PRIM_TRIANGLE;
   info.material = material;
   info.line = line;
   info.firstPiece = static_cast<std::uint32_t>(scene.triangles.size());
@@ -150,14 +118,14 @@ bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& vert
   Triangulation tri = TriangulatePolygon(verts);
   if (tri.degenerate) {
     if (warnIfDegenerate)
-      Warn(fmt::format("{}:{}: degenerate {} ({} vertices, zero area): skipped, id {} kept", file, line, PrimKindName(kind),
+      Warn(fmt::format("{}:{}: degenerate {} ({} vertices, zero area): skipped, id {} kept", file, line, PrimInfoName(info),
                      verts.size(), id));
     scene.prims.push_back(info);
     return false;
   }
   if (tri.nonSimple)
     Warn(fmt::format("{}:{}: {} is not simple (self-intersecting?): triangulated as well as possible", file, line,
-                     PrimKindName(kind)));
+                     PrimInfoName(info)));
   if (normals && scene.triNormals.size() < scene.triangles.size()) scene.triNormals.resize(scene.triangles.size());
   for (const auto& t : tri.triangles) {
     Triangle piece{};
@@ -167,8 +135,7 @@ bool AddPolygon(Scene& scene, PrimKind kind, const std::vector<glm::dvec3>& vert
       piece.v2[a] = static_cast<float>(verts[t[2]][a]);
     }
     piece.flags = (verts.size() == 3 ? CR_TRI_REPORT_UV : 0u) | TriangleEdgeFlags(piece);
-    scene.triangles.push_back(piece);
-    scene.triangleIds.push_back(id);
+    scene.AddPiece(piece, id);
     if (normals) {
       scene.triNormals.push_back({(*normals)[t[0]], (*normals)[t[1]], (*normals)[t[2]]});
     } else if (!scene.triNormals.empty()) {

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -45,18 +46,27 @@ struct Material {
   float ior = 1.0f;
 };
 
-enum class PrimKind : std::uint8_t { kSphere, kCone, kPolygon, kPatch, kFace };
-const char* PrimKindName(PrimKind kind);
+// What a geometry statement is: one piece of its primitive type (NFF `s`
+// or `c`: a shape), or a polygon, patch or OBJ face split into triangles.
+enum class PrimKind : std::uint8_t { kShape, kPolygon, kPatch, kFace };
 
 // One geometry statement (one primitive id).
 struct PrimInfo {
-  PrimKind kind = PrimKind::kSphere;
-  bool insideVisible = false;  // NFF negative radius
+  PrimKind kind = PrimKind::kShape;
+  std::uint8_t type = CR_PRIM_SPHERE;  // CR_PRIM_* of its pieces
+  bool insideVisible = false;          // NFF negative radius
   std::uint32_t material = 0;
   std::uint32_t line = 0;        // line of the statement in its file
-  std::uint32_t firstPiece = 0;  // index into spheres, cones or triangles
+  std::uint32_t firstPiece = 0;  // index into the array of its type
   std::uint32_t nPieces = 0;     // 0: degenerate, no geometry
 };
+// "sphere", "polygon", ...: the statement's kind, or its type for a shape.
+const char* PrimInfoName(const PrimInfo& info);
+
+// Selects a primitive type in overloads (Scene::Pieces and the per-type
+// functions of host/prims/prim_host.h).
+template <class T>
+struct PrimTag {};
 
 // Vertex normals of a patch piece (zero vectors for flat pieces).
 using TriNormals = std::array<glm::vec3, 3>;
@@ -87,26 +97,60 @@ struct Scene {
   std::vector<Material> materials;  // materials[0] is the default
   std::vector<PrimInfo> prims;      // indexed by primitive id
 
-  std::vector<Sphere> spheres;
-  std::vector<std::uint32_t> sphereIds;
-  std::vector<Triangle> triangles;
-  std::vector<std::uint32_t> triangleIds;
+  // One array per primitive type (CR_PRIM_TYPES: spheres, triangles, ...),
+  // Pieces(PrimTag<T>{}) names it generically and TypeIndex its CR_PRIM_*;
+  // pieceIds[k][i]: primitive id of piece i of type k.
+#define CR_SCENE_ARRAY_(T, U, a)                                           \
+  std::vector<T> a;                                                        \
+  std::vector<T>& Pieces(PrimTag<T>) { return a; }                         \
+  const std::vector<T>& Pieces(PrimTag<T>) const { return a; }             \
+  static constexpr std::uint32_t TypeIndex(PrimTag<T>) { return CR_PRIM_##U; }
+  CR_PRIM_TYPES(CR_SCENE_ARRAY_)
+#undef CR_SCENE_ARRAY_
+  std::vector<std::uint32_t> pieceIds[CR_NUM_PRIM_TYPES];
   std::vector<TriNormals> triNormals;  // per triangle when any patch exists, else empty
-  std::vector<Cone> cones;
-  std::vector<std::uint32_t> coneIds;
+
+  // Appends a piece of primitive id `id`; returns its index in its array.
+  template <class T>
+  std::uint32_t AddPiece(const T& piece, std::uint32_t id)
+  {
+    auto& v = Pieces(PrimTag<T>{});
+    v.push_back(piece);
+    pieceIds[TypeIndex(PrimTag<T>{})].push_back(id);
+    return static_cast<std::uint32_t>(v.size() - 1);
+  }
+  // f(piece, local) on unified piece g (its type's array, and its index there).
+  template <class F>
+  decltype(auto) Visit(std::uint32_t g, F&& f) const
+  {
+    const PrimRanges r = Ranges();
+#define CR_SCENE_VISIT_(T, U, a) \
+  if (g < Prim_End(&r, CR_PRIM_##U)) return f(a[Prim_Local(&r, CR_PRIM_##U, g)], Prim_Local(&r, CR_PRIM_##U, g));
+    CR_PRIM_TYPES(CR_SCENE_VISIT_)
+#undef CR_SCENE_VISIT_
+    throw std::out_of_range("unified primitive index past the scene's primitives");
+  }
+  // f(array, k) on each type's array, in unified order.
+  template <class F>
+  void ForEachType(F&& f) const
+  {
+#define CR_SCENE_EACH_(T, U, a) f(a, CR_PRIM_##U);
+    CR_PRIM_TYPES(CR_SCENE_EACH_)
+#undef CR_SCENE_EACH_
+  }
 
   std::uint32_t NumPrims() const { return static_cast<std::uint32_t>(prims.size()); }
   std::uint32_t NumUnified() const;
   PrimRanges Ranges() const;
-  // Primitive id of unified index g (spheres, then triangles, then cones).
+  // Primitive id of unified index g (the types in CR_PRIM_TYPES order).
   std::uint32_t IdOfUnified(std::uint32_t g) const;
   // Scene-file id of every unified index, in order.
   std::vector<std::uint32_t> UnifiedIds() const;
   // Tight bounds of primitive g / of all geometry.
   Bounds UnifiedBounds(std::uint32_t g) const;
   Bounds WorldBounds() const;
-  // Statement counts by kind (tests assert them against the SPD table).
-  std::uint32_t CountKind(PrimKind kind) const;
+  // Statement counts by kind and type (tests assert them against the SPD table).
+  std::uint32_t CountKind(PrimKind kind, std::uint32_t type) const;
   bool HasPatchNormals() const { return !triNormals.empty(); }
   const Material& MaterialOf(std::uint32_t primId) const { return materials[prims[primId].material]; }
 };

@@ -1,7 +1,8 @@
 // Surface points of hits and robust origins for the rays that leave them.
 //
 // The hit point is reprojected onto the surface in double (barycentric
-// interpolation on triangles, radial projection on spheres and cones), so it
+// interpolation on triangles, radial projection on spheres: each type's
+// SurfaceAt, host/prims/), so it
 // does not inherit the error of the hit's t. The origin of a secondary ray is
 // then moved off the surface along the normal by an error bound, in the
 // manner of pbrt-v4's OffsetRayOrigin (Pharr, Jakob & Humphreys, 4th ed.,

@@ -75,17 +75,16 @@ inline void CheckMessage(const InputError& e, std::string_view path1, std::strin
 inline void CheckScene(const Scene& s)
 {
   auto finite3 = [](const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); };
-  if (s.sphereIds.size() != s.spheres.size() || s.triangleIds.size() != s.triangles.size() ||
-      s.coneIds.size() != s.cones.size())
-    Fail("per-type id arrays differ in length from their primitives");
+  const PrimRanges ranges = s.Ranges();
+  for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
+    if (s.pieceIds[k].size() != Prim_Count(&ranges, k)) Fail("per-type id arrays differ in length from their primitives");
   if (!s.triNormals.empty() && s.triNormals.size() != s.triangles.size()) Fail("triNormals not one per triangle");
   std::size_t pieces = 0;
   for (std::uint32_t id = 0; id < s.NumPrims(); ++id) {
     const PrimInfo& p = s.prims[id];
     if (p.material >= s.materials.size()) Fail("material index out of range");
-    const std::vector<std::uint32_t>* ids = p.kind == PrimKind::kSphere  ? &s.sphereIds
-                                            : p.kind == PrimKind::kCone ? &s.coneIds
-                                                                        : &s.triangleIds;
+    if (p.type >= CR_NUM_PRIM_TYPES) Fail("type out of range");
+    const std::vector<std::uint32_t>* ids = &s.pieceIds[p.type];
     if (std::size_t(p.firstPiece) + p.nPieces > ids->size()) Fail("pieces out of range");
     for (std::uint32_t k = 0; k < p.nPieces; ++k)
       if ((*ids)[p.firstPiece + k] != id) Fail("a piece reports another id");

@@ -38,8 +38,7 @@ std::string Unavailable(Backend b, Precision p)
   PrimInfo info;
   info.nPieces = 1;
   probe.prims.push_back(info);
-  probe.spheres.push_back(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f});
-  probe.sphereIds.push_back(0);
+  probe.AddPiece(Sphere{{0.0f, 0.0f, 0.0f}, 1.0f}, 0);
   std::string why;
   try {
     TraceConfig cfg;

@@ -138,12 +138,11 @@ HardCase RawPieces(const GenOptions& o)
   auto rawTriangle = [&](const glm::vec3& a, const glm::vec3& bb, const glm::vec3& cc) {
     PrimInfo info;
     info.kind = PrimKind::kPolygon;
-    info.firstPiece = std::uint32_t(s.triangles.size());
+    info.type = CR_PRIM_TRIANGLE;
     info.nPieces = 1;
     cr::Triangle t{{a.x, a.y, a.z}, CR_TRI_REPORT_UV, {bb.x, bb.y, bb.z}, 0, {cc.x, cc.y, cc.z}, 0};
     t.flags |= TriangleEdgeFlags(t);
-    s.triangleIds.push_back(s.NumPrims());
-    s.triangles.push_back(t);
+    info.firstPiece = s.AddPiece(t, s.NumPrims());
     s.prims.push_back(info);
   };
   rawTriangle({0, 0, 5}, {1, 1, 5}, {2, 2, 5});   // collinear
@@ -151,20 +150,16 @@ HardCase RawPieces(const GenOptions& o)
   rawTriangle({5, 5, 5}, {5, 5, 5}, {5, 5, 5});   // a point
   {
     PrimInfo info;
-    info.kind = PrimKind::kSphere;
-    info.firstPiece = std::uint32_t(s.spheres.size());
+    info.type = CR_PRIM_SPHERE;
     info.nPieces = 1;
-    s.sphereIds.push_back(s.NumPrims());
-    s.spheres.push_back(cr::Sphere{{4, 0, 0}, 0.0f});
+    info.firstPiece = s.AddPiece(cr::Sphere{{4, 0, 0}, 0.0f}, s.NumPrims());
     s.prims.push_back(info);
   }
   {
     PrimInfo info;
-    info.kind = PrimKind::kCone;
-    info.firstPiece = std::uint32_t(s.cones.size());
+    info.type = CR_PRIM_CONE;
     info.nPieces = 1;
-    s.coneIds.push_back(s.NumPrims());
-    s.cones.push_back(cr::Cone{{0, -8, 0}, 0.0f, {0, -8, 3}, 0.0f});
+    info.firstPiece = s.AddPiece(cr::Cone{{0, -8, 0}, 0.0f, {0, -8, 3}, 0.0f}, s.NumPrims());
     s.prims.push_back(info);
   }
   b.Sphere({6, 0, 0}, 1.0);

@@ -6,6 +6,7 @@
 #include "tests/hard/gen/hard_gen.h"
 #include "host/core/error.h"
 #include "host/reference/reference.h"
+#include "host/scene/nff.h"
 
 namespace cr::hard {
 
@@ -35,19 +36,8 @@ SceneBuilder::SceneBuilder() : scene_(std::make_shared<Scene>())
 std::uint32_t SceneBuilder::Sphere(const glm::dvec3& c, double r)
 {
   const std::uint32_t id = NextId();
-  PrimInfo info;
-  info.kind = PrimKind::kSphere;
-  info.line = id + 1;
-  const float rf = float(std::fabs(r));
-  if (rf == 0.0f) {
-    Warn(fmt::format("generated:{}: sphere of radius 0: skipped, id {} kept", id + 1, id));
-  } else {
-    info.firstPiece = std::uint32_t(scene_->spheres.size());
-    info.nPieces = 1;
-    scene_->spheres.push_back(cr::Sphere{{float(c.x), float(c.y), float(c.z)}, rf});
-    scene_->sphereIds.push_back(id);
-  }
-  scene_->prims.push_back(info);
+  NffValues st("s", scene_->path, id + 1, {c.x, c.y, c.z, r});
+  ReadGeometry(st, *scene_);
   return id;
 }
 
@@ -66,21 +56,8 @@ std::uint32_t SceneBuilder::Polygon(const std::vector<glm::dvec3>& v)
 std::uint32_t SceneBuilder::Cone(const glm::dvec3& base, double baseRadius, const glm::dvec3& apex, double apexRadius)
 {
   const std::uint32_t id = NextId();
-  PrimInfo info;
-  info.kind = PrimKind::kCone;
-  info.line = id + 1;
-  cr::Cone cn{{float(base.x), float(base.y), float(base.z)}, float(std::fabs(baseRadius)),
-              {float(apex.x), float(apex.y), float(apex.z)}, float(std::fabs(apexRadius))};
-  const bool sameEnds = cn.base[0] == cn.apex[0] && cn.base[1] == cn.apex[1] && cn.base[2] == cn.apex[2];
-  if (sameEnds || (cn.baseRadius == 0.0f && cn.apexRadius == 0.0f)) {
-    Warn(fmt::format("generated:{}: degenerate cone: skipped, id {} kept", id + 1, id));
-  } else {
-    info.firstPiece = std::uint32_t(scene_->cones.size());
-    info.nPieces = 1;
-    scene_->cones.push_back(cn);
-    scene_->coneIds.push_back(id);
-  }
-  scene_->prims.push_back(info);
+  NffValues st("c", scene_->path, id + 1, {base.x, base.y, base.z, baseRadius, apex.x, apex.y, apex.z, apexRadius});
+  ReadGeometry(st, *scene_);
   return id;
 }
 

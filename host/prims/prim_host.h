@@ -1,0 +1,90 @@
+// The host side of the primitive types: what every type of CR_PRIM_TYPES
+// (kernels/types.h) provides, declared here once for all of them and defined
+// by each type in its own file, host/prims/<type>.cpp. Generic code reaches
+// a type's function by overload: Scene::Visit(g, f) hands f the piece as its
+// own type, and f calls, say, OverlapsBox(piece, lo, hi).
+//
+// Why a list of overloads and not a class hierarchy or a traits template:
+// the device side has only the preprocessor (OpenCL C), so the list of
+// types is an X-macro there; the same X-macro declares the host functions
+// below, a type missing one fails to link with its name, and no host code
+// needs a virtual call or a `switch` over the types.
+//
+// Adding a type: its layout and CR_PRIM_TYPES entry in kernels/types.h, its
+// device test in kernels/<type>.h, its SIMD form (simd/), and these
+// functions in host/prims/<type>.cpp (docs/ARCHITECTURE.md has the list).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "host/reference/geometry_d.h"
+#include "host/scene/scene.h"
+
+namespace cr {
+
+class NffStatement;  // host/scene/nff.h
+
+// A hit's point reprojected onto the surface (host/scene/surface.h).
+struct LocalSurface {
+  glm::dvec3 p{0.0};   // on the surface
+  glm::dvec3 ng{0.0};  // outward geometric normal, unit
+  glm::dvec3 ns{0.0};  // shading normal, unit (ng unless the type interpolates one)
+};
+
+// Per type T:
+//  PrimTypeName   its name in messages and JSON ("sphere");
+//  FloatBounds    its float box, rounded outward (builders, Embree boxes);
+//  OverlapsBox    does its surface meet the box? exact or conservative, in
+//                 double (grid and octree insertion, prim_overlap.h);
+//  Scale          largest magnitude of its defining points (radii added):
+//                 the scale of a float intersector's rounding on it;
+//  SurfaceAt      the hit point near pApprox (with the hit's u, v) on its
+//                 surface, in double, and its normals;
+//  RefBounds      double box, rounded outward (the reference's BVH);
+//  RefRoots       every root in [tmin, tmax], ascending (u, v of the first
+//                 where the type reports them), in double;
+//  RefDistance    distance from x to its surface; RefNormal: outward normal
+//                 at x (unit);
+//  RefBall        a ball around it (check's near-miss search), and
+//  RefNearTimes   the ray parameters in [t0, t1] where the ray comes closest
+//                 to it (check.cpp NearRay);
+//  ParseNff       reads its NFF statement if `st` is one (returns false if
+//                 not), adding the piece(s) and the PrimInfo to the scene.
+#define CR_PRIM_HOST_DECLS_(T, U, a)                                                                             \
+  const char* PrimTypeName(PrimTag<T>);                                                                          \
+  Bounds FloatBounds(const T& p);                                                                                \
+  bool OverlapsBox(const T& p, const glm::dvec3& lo, const glm::dvec3& hi);                                     \
+  double Scale(const T& p);                                                                                      \
+  LocalSurface SurfaceAt(const Scene& scene, const T& p, std::uint32_t local, const glm::dvec3& pApprox, double u, \
+                         double v);                                                                              \
+  void RefBounds(const T& p, glm::dvec3& lo, glm::dvec3& hi);                                                    \
+  int RefRoots(const ref::DRay& r, const T& p, double t[2], double* u, double* v);                               \
+  double RefDistance(const T& p, const glm::dvec3& x);                                                           \
+  glm::dvec3 RefNormal(const T& p, const glm::dvec3& x);                                                         \
+  void RefBall(const T& p, glm::dvec3& mid, double& reach);                                                      \
+  void RefNearTimes(const T& p, const ref::DRay& r, double t0, double t1, std::vector<double>& ts);             \
+  bool ParseNff(PrimTag<T>, NffStatement& st, Scene& scene);
+CR_PRIM_TYPES(CR_PRIM_HOST_DECLS_)
+#undef CR_PRIM_HOST_DECLS_
+
+// Name of type k (CR_PRIM_*).
+const char* PrimTypeName(std::uint32_t k);
+
+// Unified piece g against the box (grid and octree insertion); the caller
+// has already checked that the box meets g's bounding box. Builders make the
+// test conservative by passing a slightly enlarged box (grid_builder.cpp).
+inline bool PrimOverlapsBox(const Scene& scene, std::uint32_t g, const glm::dvec3& lo, const glm::dvec3& hi)
+{
+  return scene.Visit(g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, lo, hi); });
+}
+
+// Largest component magnitude (shared by the types' Scale and SurfaceAt).
+inline double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
+
+}  // namespace cr
