@@ -14,100 +14,11 @@
 // entered it, a primitive test once for every lane it was run for.
 #pragma once
 
+#include <type_traits>
+
 #include "simd/kernel_common.h"
 
 namespace cr::simd::CR_SIMD_NS {
-
-template <int N>
-struct RayPacket {
-  vfloat<N> org[3], dir[3], inv[3];
-  vbool<N> invNeg[3];  // inv < 0: the near plane is bmax
-  vfloat<N> tmin;
-  vfloat<N> dd;       // d.d, for the sphere test
-  vfloat<N> s[3];     // shear constants sx, sy, sz
-  vint<N> k[3];       // kx, ky, kz
-  vint<N> sel[3];     // ComponentSelector of kx, ky, kz
-  vfloat<N> orgK[3];  // org[kx], org[ky], org[kz]
-  // When every lane has the same kx, ky, kz (coherent packets), they are
-  // kScalar, and triangle tests broadcast components instead of permuting.
-  bool kUniform;
-  int kScalar[3];
-  // When every lane has the same direction signs (coherent packets), the
-  // near plane of axis a is node float nearOff[a] for all lanes (bmin[a] or
-  // bmax[a] as BVHNode lays them out), and the per-lane plane choice is skipped.
-  bool sameSigns;
-  int nearOff[3], farOff[3];
-};
-
-template <int N>
-struct HitPacket {
-  vfloat<N> t, u, v;
-  vint<N> g;
-};
-
-// Ray_Init of kernels/ray.h on all lanes at once, from the N records (a
-// lane's record pointer may repeat another's to pad the packet); hits as
-// Hit_Init leaves them. Same operations as Ray_Init, lane by lane: the
-// reciprocals and shear constants are IEEE divisions, the dominant axis kz
-// comes from the same comparisons (so NaN components choose as they do).
-template <int N>
-CR_SIMD_INLINE void RayPacket_Init(RayPacket<N>& p, HitPacket<N>& h, const RayRecord* const recs[N])
-{
-  static_assert(sizeof(RayRecord) == 8 * sizeof(float));
-  const float* rows[N];
-  for (int l = 0; l < N; ++l) rows[l] = recs[l]->org;
-  vfloat<N> c[8];  // org x y z, tmin, dir x y z, tmax
-  LoadTransposed(rows, c);
-  const vfloat<N>* org = c;
-  const vfloat<N>* dir = c + 4;
-  for (int a = 0; a < 3; ++a) {
-    p.org[a] = org[a];
-    p.dir[a] = dir[a];
-    p.inv[a] = vfloat<N>(1.0f) / dir[a];
-    p.invNeg[a] = p.inv[a] < vfloat<N>(0.0f);
-  }
-  p.tmin = c[3];
-  p.dd = Dot3N<N>(p.dir, p.dir);
-  h.t = c[7];
-  h.u = vfloat<N>(0.0f);
-  h.v = vfloat<N>(0.0f);
-  h.g = vint<N>(static_cast<int>(CR_NO_HIT));
-
-  const vfloat<N> ax = Abs(dir[0]), ay = Abs(dir[1]), az = Abs(dir[2]);
-  const vint<N> k0(0), k1(1), k2(2);
-  const vint<N> kz = Select(ax > ay, Select(ax > az, k0, k2), Select(ay > az, k1, k2));
-  vint<N> kx = Select(kz == k2, k0, kz + k1);
-  vint<N> ky = Select(kx == k2, k0, kx + k1);
-  auto pick = [&](const vfloat<N>* v, vint<N> k) { return Select(k == k0, v[0], Select(k == k1, v[1], v[2])); };
-  const vfloat<N> dz = pick(dir, kz);
-  const vbool<N> flip = dz < vfloat<N>(0.0f);
-  const vint<N> kxs = Select(flip, ky, kx);
-  ky = Select(flip, kx, ky);
-  kx = kxs;
-  p.s[0] = pick(dir, kx) / dz;
-  p.s[1] = pick(dir, ky) / dz;
-  p.s[2] = vfloat<N>(1.0f) / dz;
-  p.k[0] = kx;
-  p.k[1] = ky;
-  p.k[2] = kz;
-  for (int j = 0; j < 3; ++j) {
-    p.sel[j] = ComponentSelector(p.k[j]);
-    p.orgK[j] = pick(org, p.k[j]);
-  }
-  p.kUniform = true;
-  for (int j = 0; j < 3; ++j) {
-    const int first = static_cast<int>(p.k[j][0]);
-    p.kScalar[j] = first;
-    p.kUniform = p.kUniform && All(p.k[j] == vint<N>(first));
-  }
-  p.sameSigns = true;
-  for (int a = 0; a < 3; ++a) {
-    const unsigned neg = p.invNeg[a].Bits();
-    p.sameSigns = p.sameSigns && (neg == 0 || neg == vbool<N>::kAll);
-    p.nearOff[a] = neg ? 4 + a : a;  // BVHNode: bmin at floats 0..2, bmax at 4..6
-    p.farOff[a] = neg ? a : 4 + a;
-  }
-}
 
 // Box_Intersect of one node against every lane.
 template <int N, bool kFast>
@@ -126,59 +37,15 @@ CR_SIMD_INLINE vbool<N> PacketBox_Intersect(const BVHNode& node, const RayPacket
   return Box_IntersectRays<kFast, N>(node.bmin, node.bmax, P.org, P.inv, P.invNeg, P.tmin, tmax, tEnter);
 }
 
-// Primitive g, known to be of type kType, against the lanes of m; keeps each
+// Primitive g, known to be of type T, against the lanes of m; keeps each
 // lane's closer hit (Hit_Closer). Returns the lanes whose hit changed.
-template <int N, PrimType kType, bool kFast>
+template <int N, class T, bool kFast>
 CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                                HitPacket<N>& H, vbool<N> m)
 {
   vfloat<N> t, u(0.0f), v(0.0f);
-  vbool<N> ok;
   const PrimRanges& c = sc.ranges;
-  if constexpr (kType == PrimType::Sphere) {
-    const Sphere& sp = sc.spheres[g];
-    const vfloat<N> cen[3] = {vfloat<N>(sp.center[0]), vfloat<N>(sp.center[1]), vfloat<N>(sp.center[2])};
-    ok = Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, P.dd, vfloat<N>(sp.radius), P.tmin, H.t, t);
-  } else if constexpr (kType == PrimType::Triangle) {
-    const Triangle& tri = sc.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
-    if constexpr (kFast) {
-      vfloat<N> v0[3], v1[3], v2[3];
-      for (int i = 0; i < 3; ++i) {
-        v0[i] = vfloat<N>(tri.v0[i]);
-        v1[i] = vfloat<N>(tri.v1[i]);
-        v2[i] = vfloat<N>(tri.v2[i]);
-      }
-      ok = Triangle_MollerTrumboreN<N>(v0, v1, v2, P.org, P.dir, P.tmin, H.t, t, u, v);
-    } else {
-      vfloat<N> A[3], B[3], C[3];
-      if (P.kUniform) {
-        // Every lane has the same axis permutation (coherent packets): the
-        // permuted components are plain broadcasts.
-        for (int j = 0; j < 3; ++j) {
-          A[j] = vfloat<N>(tri.v0[P.kScalar[j]]) - P.orgK[j];
-          B[j] = vfloat<N>(tri.v1[P.kScalar[j]]) - P.orgK[j];
-          C[j] = vfloat<N>(tri.v2[P.kScalar[j]]) - P.orgK[j];
-        }
-      } else {
-        for (int j = 0; j < 3; ++j) {
-          A[j] = PermuteXYZ(tri.v0, P.sel[j]) - P.orgK[j];
-          B[j] = PermuteXYZ(tri.v1, P.sel[j]) - P.orgK[j];
-          C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
-        }
-      }
-      ok = Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>{tri}, P.org, P.dir, P.tmin, H.t, t, u, v);
-    }
-  } else {
-    const ConeData& cd = sc.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
-    vfloat<N> dl[3], w[3];
-    for (int i = 0; i < 3; ++i) {
-      dl[i] = P.org[i] - vfloat<N>(cd.base[i]);
-      w[i] = vfloat<N>(cd.w[i]);
-    }
-    const Cone* cone = &sc.coneGeometry[Prim_Local(&c, CR_PRIM_CONE, g)];
-    ok = Cone_IntersectN<kFast, N>(P.org, dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin,
-                                   H.t, t, [cone](int) { return cone; });
-  }
+  const vbool<N> ok = SimdTest<T>::template Packet<N, kFast>(sc, g, P, H.t, t, u, v);
   const vint<N> gv(static_cast<int>(g));
   const vbool<N> found = m & ok;
   vbool<N> closer = found & (t < H.t);
@@ -188,14 +55,14 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
   const vbool<N> tied = found & (t == H.t);
   if (Any(tied)) [[unlikely]] {
     closer = closer | (tied & LessUnsigned(gv, H.g));
-    if constexpr (kType == PrimType::Sphere && !kFast) {
+    if constexpr (std::is_same_v<T, Sphere> && !kFast) {
       const vbool<N> tie = tied & LessUnsigned(H.g, vint<N>(static_cast<int>(Prim_End(&c, CR_PRIM_SPHERE)))) & !(gv == H.g);
       unsigned bits = closer.Bits();
       for (unsigned rest = tie.Bits(); rest; rest &= rest - 1u) {
         const int l = LowestBit(rest);
         const float org[3] = {P.org[0][l], P.org[1][l], P.org[2][l]};
         const float dir[3] = {P.dir[0][l], P.dir[1][l], P.dir[2][l]};
-        const int order = Sphere_TieOrder(org, dir, P.tmin[l], &sc.spheres[g], &sc.spheres[H.g[l]]);
+        const int order = Sphere_TieOrder(org, dir, P.tmin[l], &ScenePrims<Sphere>(sc)[g], &ScenePrims<Sphere>(sc)[H.g[l]]);
         if (order != 0) bits = order < 0 ? bits | (1u << l) : bits & ~(1u << l);
       }
       closer = vbool<N>::FromBits(bits);
@@ -209,17 +76,20 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
   return closer;
 }
 
-// Primitive g of any type in kTypes against the lanes of m (as above).
+// Primitive g of any type in kTypes against the lanes of m (as above): its
+// type is found among kTypes only, so a scene of one type never branches.
 template <int N, unsigned kTypes, bool kFast>
 CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                              HitPacket<N>& H, vbool<N> m)
 {
-  switch (TypeOf<kTypes>(g, sc.ranges)) {
-    case PrimType::Sphere: return PacketPrim_IntersectAs<N, PrimType::Sphere, kFast>(sc, g, P, H, m);
-    case PrimType::Triangle: return PacketPrim_IntersectAs<N, PrimType::Triangle, kFast>(sc, g, P, H, m);
-    case PrimType::Cone: break;
+#define CR_SIMD_PACKET_TYPE_(T, U, a)                                                \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                      \
+    if (IsLastType<kTypes>(CR_PRIM_##U) || g < Prim_End(&sc.ranges, CR_PRIM_##U))    \
+      return PacketPrim_IntersectAs<N, T, kFast>(sc, g, P, H, m);                    \
   }
-  return PacketPrim_IntersectAs<N, PrimType::Cone, kFast>(sc, g, P, H, m);
+  CR_PRIM_TYPES(CR_SIMD_PACKET_TYPE_)
+#undef CR_SIMD_PACKET_TYPE_
+  __builtin_unreachable();
 }
 
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`.

@@ -19,35 +19,6 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
-// The ray broadcast to the K lanes of the primitive packs.
-template <int K>
-struct PackRay {
-  vfloat<K> org[3], dir[3];
-  vfloat<K> orgK[3];  // org[kx], org[ky], org[kz]
-  vfloat<K> s[3];
-  vfloat<K> tmin;
-  vfloat<K> dd;  // d.d, for the sphere test
-  int k[3];
-};
-
-template <int K>
-CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
-{
-  pr.k[0] = r.kx;
-  pr.k[1] = r.ky;
-  pr.k[2] = r.kz;
-  for (int a = 0; a < 3; ++a) {
-    pr.org[a] = vfloat<K>(r.org[a]);
-    pr.dir[a] = vfloat<K>(r.dir[a]);
-    pr.orgK[a] = vfloat<K>(r.org[pr.k[a]]);
-  }
-  pr.s[0] = vfloat<K>(r.sx);
-  pr.s[1] = vfloat<K>(r.sy);
-  pr.s[2] = vfloat<K>(r.sz);
-  pr.tmin = vfloat<K>(r.tmin);
-  pr.dd = Dot3N<K>(pr.dir, pr.dir);
-}
-
 // Hit_CloserOn's order of two spheres whose float distances tie exactly
 // (robust mode), for the ray of the pack: -1 when sphere ga comes first.
 template <int K>
@@ -56,7 +27,7 @@ CR_SIMD_INLINE int Pack_SphereTieOrder(const KernelScene& sc, const PackRay<K>& 
 {
   const float org[3] = {pr.org[0][0], pr.org[1][0], pr.org[2][0]};
   const float dir[3] = {pr.dir[0][0], pr.dir[1][0], pr.dir[2][0]};
-  return Sphere_TieOrder(org, dir, pr.tmin[0], &sc.spheres[ga], &sc.spheres[gb]);
+  return Sphere_TieOrder(org, dir, pr.tmin[0], &ScenePrims<Sphere>(sc)[ga], &ScenePrims<Sphere>(sc)[gb]);
 }
 
 // Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit
@@ -98,6 +69,32 @@ CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
   return !(vint<K>::Load(g) == vint<K>(static_cast<int>(CR_NO_HIT)));
 }
 
+// The leaf's packs of type T (SimdTest<T>::Pack). Returns true to stop (an
+// occlusion query has its occluder); `changed` when the hit changed.
+template <class T, int K, bool kFast, bool kStats>
+CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
+                                           int anyHit, TraceStatsSum& st, bool& changed)
+{
+  constexpr unsigned k = kPrimIndex<T>;
+  using Pack = typename SimdPrim<T>::template Pack<K>;
+  // Exact ties between two of the type's primitives ordered by distance
+  // (spheres, robust mode: Hit_CloserOn).
+  constexpr bool kTies = SimdPrim<T>::kDistanceTies && !kFast;
+  const Pack* packs = static_cast<const Pack*>(sc.packs[k]) + leaf.first[k];
+  for (int p = 0; p < leaf.count[k]; ++p) {
+    const Pack& pk = packs[p];
+    const vbool<K> valid = Pack_Valid<K>(pk.g);
+    if constexpr (kStats) st.nIT += PopCount(valid.Bits());
+    vfloat<K> t, u(0.0f), v(0.0f);
+    const vbool<K> ok = valid & SimdTest<T>::template Pack<K, kFast>(sc, pk, valid, pr, vfloat<K>(hit.t), t, u, v);
+    if (Pack_Reduce<K>(ok, t, u, v, pk.g, hit, kTies ? &sc : nullptr, &pr)) {
+      changed = true;
+      if (anyHit) return true;
+    }
+  }
+  return false;
+}
+
 // The leaf's packs, type by type. Returns true when the hit changed
 // (occlusion: as soon as it does).
 template <int K, unsigned kTypes, bool kFast, bool kStats>
@@ -105,78 +102,11 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& le
                                        int anyHit, TraceStatsSum& st)
 {
   bool changed = false;
-  if constexpr (kTypes & kSphereBit) {
-    const SpherePack<K>* packs = static_cast<const SpherePack<K>*>(sc.spherePacks) + leaf.first[0];
-    for (int p = 0; p < leaf.count[0]; ++p) {
-      const SpherePack<K>& pk = packs[p];
-      const vbool<K> valid = Pack_Valid<K>(pk.g);
-      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
-      vfloat<K> cen[3], t;
-      for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
-      const vbool<K> ok = valid & Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius),
-                                                             pr.tmin, vfloat<K>(hit.t), t);
-      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit, kFast ? nullptr : &sc, &pr)) {
-        changed = true;
-        if (anyHit) return true;
-      }
-    }
-  }
-  if constexpr (kTypes & kTriangleBit) {
-    const TrianglePack<K>* packs = static_cast<const TrianglePack<K>*>(sc.trianglePacks) + leaf.first[1];
-    for (int p = 0; p < leaf.count[1]; ++p) {
-      const TrianglePack<K>& pk = packs[p];
-      const vbool<K> valid = Pack_Valid<K>(pk.g);
-      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
-      vfloat<K> t, u, v;
-      vbool<K> ok;
-      if constexpr (kFast) {
-        vfloat<K> v0[3], v1[3], v2[3];
-        for (int i = 0; i < 3; ++i) {
-          v0[i] = vfloat<K>::Load(pk.v[0][i]);
-          v1[i] = vfloat<K>::Load(pk.v[1][i]);
-          v2[i] = vfloat<K>::Load(pk.v[2][i]);
-        }
-        ok = Triangle_MollerTrumboreN<K>(v0, v1, v2, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t, u, v);
-      } else {
-        vfloat<K> A[3], B[3], C[3];
-        for (int j = 0; j < 3; ++j) {
-          A[j] = vfloat<K>::Load(pk.v[0][pr.k[j]]) - pr.orgK[j];
-          B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
-          C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
-        }
-        ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.flags}, pr.org, pr.dir, pr.tmin, vfloat<K>(hit.t), t,
-                                     u, v);
-      }
-      if (Pack_Reduce<K>(valid & ok, t, u, v, pk.g, hit)) {
-        changed = true;
-        if (anyHit) return true;
-      }
-    }
-  }
-  if constexpr (kTypes & kConeBit) {
-    const ConePack<K>* packs = static_cast<const ConePack<K>*>(sc.conePacks) + leaf.first[2];
-    for (int p = 0; p < leaf.count[2]; ++p) {
-      const ConePack<K>& pk = packs[p];
-      const vbool<K> valid = Pack_Valid<K>(pk.g);
-      if constexpr (kStats) st.nIT += PopCount(valid.Bits());
-      vfloat<K> dl[3], w[3], t;
-      for (int i = 0; i < 3; ++i) {
-        dl[i] = pr.org[i] - vfloat<K>::Load(pk.base[i]);
-        w[i] = vfloat<K>::Load(pk.w[i]);
-      }
-      const vbool<K> ok =
-          valid & Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
-                                            vfloat<K>::Load(pk.k), pr.tmin, vfloat<K>(hit.t), t, [&](int l) {
-                                              return valid.Bits() >> l & 1u
-                                                         ? &sc.coneGeometry[Prim_Local(&sc.ranges, CR_PRIM_CONE, pk.g[l])]
-                                                         : nullptr;
-                                            });
-      if (Pack_Reduce<K>(ok, t, vfloat<K>(0.0f), vfloat<K>(0.0f), pk.g, hit)) {
-        changed = true;
-        if (anyHit) return true;
-      }
-    }
-  }
+#define CR_SIMD_LEAF_TYPE_(T, U, a)                                                                  \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                        \
+    if (WideLeaf_IntersectType<T, K, kFast, kStats>(sc, leaf, pr, hit, anyHit, st, changed)) return true;
+  CR_PRIM_TYPES(CR_SIMD_LEAF_TYPE_)
+#undef CR_SIMD_LEAF_TYPE_
   return changed;
 }
 

@@ -33,52 +33,12 @@ struct alignas(4 * N) WideNode {
 };
 static_assert(sizeof(WideNode<4>) == 112 && sizeof(WideNode<8>) == 224);
 
-// One binary leaf: its packs per type, contiguous in the pack arrays. 16 bytes.
-struct WideLeaf {
-  std::uint32_t first[3];  // first sphere, triangle, cone pack
-  std::uint8_t count[3];   // packs of each type
-  std::uint8_t pad;
+// One binary leaf: its packs per type (SimdPrim<T>::Pack<K>, simd/<type>.h),
+// contiguous in each type's pack array. 16 bytes for 3 types.
+struct alignas(4) WideLeaf {
+  std::uint32_t first[CR_NUM_PRIM_TYPES];  // first pack of each type
+  std::uint8_t count[CR_NUM_PRIM_TYPES];   // packs of each type
 };
-static_assert(sizeof(WideLeaf) == 16);
-
-// K primitives of one type, structure-of-arrays. Unused lanes have
-// g = CR_NO_HIT and zero geometry; kernels mask them by g.
-template <int K>
-struct SpherePack {  // 20 K bytes
-  float center[3][K];
-  float radius[K];
-  std::uint32_t g[K];
-};
-
-template <int K>
-struct TrianglePack {  // 44 K bytes
-  float v[3][3][K];    // [vertex][axis][lane]
-  std::uint32_t g[K];
-  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read)
-};
-
-// Cone with the ray-independent terms of Cone_Intersect (kernels/intersect.h)
-// computed once, in float, in the kernel's operation order, so the SIMD
-// kernels reproduce its rounding bit for bit: w = (apex - base) / H,
-// H = |apex - base|, r0 = base radius, k = (apex radius - r0) / H.
-struct ConeData {  // 48 bytes
-  float base[3];
-  float H;
-  float w[3];
-  float r0;
-  float k;
-  float pad[3];
-};
-static_assert(sizeof(ConeData) == 48);
-
-template <int K>
-struct ConePack {  // 40 K bytes
-  float base[3][K];
-  float w[3][K];
-  float H[K];
-  float r0[K];
-  float k[K];
-  std::uint32_t g[K];
-};
+static_assert(sizeof(WideLeaf) % 4 == 0);
 
 }  // namespace cr::simd

@@ -8,34 +8,12 @@
 
 namespace cr::simd {
 
-std::vector<ConeData> MakeConeData(const Scene& scene)
-{
-  // The operations of Cone_Intersect (kernels/intersect.h) in float, in its
-  // order; this unit is compiled with -ffp-contract=off like the kernels.
-  std::vector<ConeData> out(scene.cones.size());
-  for (std::size_t i = 0; i < scene.cones.size(); ++i) {
-    const Cone& c = scene.cones[i];
-    ConeData& d = out[i];
-    float w[3];
-    for (int a = 0; a < 3; ++a) {
-      w[a] = c.apex[a] - c.base[a];
-      d.base[a] = c.base[a];
-    }
-    d.H = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    for (int a = 0; a < 3; ++a) d.w[a] = w[a] / d.H;
-    d.r0 = c.baseRadius;
-    d.k = (c.apexRadius - d.r0) / d.H;
-  }
-  return out;
-}
-
 namespace {
 
 template <int N, int K>
 struct Collapser {
   const BVHData& bvh;
-  const Scene& scene;
-  const std::vector<ConeData>& cones;
+  const KernelScene& rows;
   WideBVH<N, K>& out;
 
   template <class Pack, class Fill>
@@ -58,46 +36,28 @@ struct Collapser {
 
   std::uint32_t Leaf(const BVHNode& b)
   {
-    const PrimRanges c = scene.Ranges();
+    const PrimRanges& c = rows.ranges;
     const std::uint32_t* refs = bvh.refs.data() + b.first;
-    // Refs of a leaf are sorted, so each type is one run.
-    std::uint32_t nS = 0, nT = 0;
-    while (nS < b.count && refs[nS] < Prim_End(&c, CR_PRIM_SPHERE)) ++nS;
-    while (nS + nT < b.count && refs[nS + nT] < Prim_End(&c, CR_PRIM_TRIANGLE)) ++nT;
-    const std::uint32_t nC = b.count - nS - nT;
     auto packCount = [](std::uint32_t n) {
       const std::uint32_t p = (n + K - 1) / K;
       if (p > 255) throw RuntimeError("simd: BVH leaf too large for the wide layout");
       return static_cast<std::uint8_t>(p);
     };
+    // Refs of a leaf are sorted, so each type is one run.
     WideLeaf leaf{};
-    leaf.count[0] = packCount(nS);
-    leaf.count[1] = packCount(nT);
-    leaf.count[2] = packCount(nC);
-    leaf.first[0] = Packs(out.spheres, refs, nS, [&](SpherePack<K>& p, int l, std::uint32_t g) {
-      const Sphere& s = scene.spheres[g];
-      for (int a = 0; a < 3; ++a) p.center[a][l] = s.center[a];
-      p.radius[l] = s.radius;
-    });
-    leaf.first[1] = Packs(out.triangles, refs + nS, nT, [&](TrianglePack<K>& p, int l, std::uint32_t g) {
-      const Triangle& t = scene.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
-      for (int a = 0; a < 3; ++a) {
-        p.v[0][a][l] = t.v0[a];
-        p.v[1][a][l] = t.v1[a];
-        p.v[2][a][l] = t.v2[a];
-      }
-      p.flags[l] = t.flags;
-    });
-    leaf.first[2] = Packs(out.cones, refs + nS + nT, nC, [&](ConePack<K>& p, int l, std::uint32_t g) {
-      const ConeData& d = cones[Prim_Local(&c, CR_PRIM_CONE, g)];
-      for (int a = 0; a < 3; ++a) {
-        p.base[a][l] = d.base[a];
-        p.w[a][l] = d.w[a];
-      }
-      p.H[l] = d.H;
-      p.r0[l] = d.r0;
-      p.k[l] = d.k;
-    });
+    std::uint32_t i = 0;
+#define CR_SIMD_LEAF_PACKS_(T, U, a)                                                                        \
+  {                                                                                                       \
+    std::uint32_t n = 0;                                                                                  \
+    while (i + n < b.count && refs[i + n] < Prim_End(&c, CR_PRIM_##U)) ++n;                               \
+    leaf.count[CR_PRIM_##U] = packCount(n);                                                               \
+    leaf.first[CR_PRIM_##U] = Packs(out.a, refs + i, n, [&](auto& p, int l, std::uint32_t g) {           \
+      SimdPrim<T>::template Fill<K>(p, l, PrimData<T>(rows)[Prim_Local(&c, CR_PRIM_##U, g)]);            \
+    });                                                                                                   \
+    i += n;                                                                                               \
+  }
+    CR_PRIM_TYPES(CR_SIMD_LEAF_PACKS_)
+#undef CR_SIMD_LEAF_PACKS_
     const auto index = static_cast<std::uint32_t>(out.leaves.size());
     if (index >= kWideLeafFlag) throw RuntimeError("simd: too many BVH leaves for the wide layout");
     out.leaves.push_back(leaf);
@@ -213,7 +173,7 @@ struct Collapser {
 };
 
 template <int N, int K>
-std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const Scene& scene, const std::vector<ConeData>& cones)
+std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const KernelScene& rows)
 {
   auto out = std::make_unique<WideBVH<N, K>>();
   out->width = N;
@@ -233,7 +193,7 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const Scene& scene, const
     return out;
   }
   out->nodes.reserve(bvh.nodes.size() / 2 + 1);
-  Collapser<N, K> c{bvh, scene, cones, *out, {}, {}, {}};
+  Collapser<N, K> c{bvh, rows, *out, {}, {}, {}};
   c.Plan();
   c.Node(0);
   return out;
@@ -241,12 +201,11 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const Scene& scene, const
 
 }  // namespace
 
-std::unique_ptr<WideBVHBase> BuildWideBVH(const BVHData& bvh, const Scene& scene, const std::vector<ConeData>& cones,
-                                          int width, int packWidth)
+std::unique_ptr<WideBVHBase> BuildWideBVH(const BVHData& bvh, const KernelScene& rows, int width, int packWidth)
 {
-  if (width == 4 && packWidth == 4) return Build<4, 4>(bvh, scene, cones);
-  if (width == 8 && packWidth == 4) return Build<8, 4>(bvh, scene, cones);
-  if (width == 8 && packWidth == 8) return Build<8, 8>(bvh, scene, cones);
+  if (width == 4 && packWidth == 4) return Build<4, 4>(bvh, rows);
+  if (width == 8 && packWidth == 4) return Build<8, 4>(bvh, rows);
+  if (width == 8 && packWidth == 8) return Build<8, 8>(bvh, rows);
   throw RuntimeError(fmt::format("simd: no wide BVH layout for width {} and pack width {}", width, packWidth));
 }
 

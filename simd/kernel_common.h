@@ -1,7 +1,8 @@
 // What every per-ISA kernel unit includes first: the wrappers, the scalar
 // ray and hit code of kernels/ (Ray, Hit, Hit_Init, Hit_Closer, Hit_ToRecord)
 // compiled inside the ISA namespace (CR_SIMD_NS, from the unit's flags:
-// simd/vec.h), and the lane-wise intersectors. (Ray_Init itself is replaced by the
+// simd/vec.h), the rays (simd/rays.h) and each primitive type's lane-wise
+// test (simd/prims.h). (Ray_Init itself is replaced by the
 // vectorised RayPacket_Init, which also keeps libstdc++'s out-of-line
 // std::fabs of a -O0 build out of these units.)
 #pragma once
@@ -19,36 +20,29 @@ typedef float real;
 }  // namespace cr::simd::CR_SIMD_NS
 
 #include "simd/intersect_simd.h"
+#include "simd/rays.h"
+#include "simd/prims.h"
 
 namespace cr::simd::CR_SIMD_NS {
 
 // Binary BVH depth bound of host/accel/bvh_builder.cpp (CR_BVH_STACK).
 inline constexpr int kBVHStack = 64;
 
-// Type of unified index g, decided only among the types in kTypes, so a scene
-// with one type never branches.
-enum class PrimType { Sphere, Triangle, Cone };
+// Whether type k is the last of kTypes (unified indices past the earlier
+// types' ranges are then of type k without a comparison).
 template <unsigned kTypes>
-inline PrimType TypeOf(std::uint32_t g, const PrimRanges& c)
+inline constexpr bool IsLastType(unsigned k)
 {
-  constexpr bool hasS = kTypes & kSphereBit, hasT = kTypes & kTriangleBit, hasC = kTypes & kConeBit;
-  if constexpr (hasS) {
-    if constexpr (!hasT && !hasC) return PrimType::Sphere;
-    if (g < Prim_End(&c, CR_PRIM_SPHERE)) return PrimType::Sphere;
-  }
-  if constexpr (hasT) {
-    if constexpr (!hasC) return PrimType::Triangle;
-    if (g < Prim_End(&c, CR_PRIM_TRIANGLE)) return PrimType::Triangle;
-  }
-  return PrimType::Cone;
+  return (kTypes >> (k + 1u)) == 0u;
 }
 
+// The scene's arrays as the scalar kernels' PrimView (Hit_ToRecord).
 inline PrimView MakePrimView(const KernelScene& sc)
 {
   PrimView pv;
-  pv.spheres = sc.spheres;
-  pv.triangles = sc.triangles;
-  pv.cones = nullptr;  // Hit_ToRecord reads triangles only
+#define CR_SIMD_PV_ARRAY_(T, U, a) pv.a = ScenePrims<T>(sc);
+  CR_PRIM_TYPES(CR_SIMD_PV_ARRAY_)
+#undef CR_SIMD_PV_ARRAY_
   pv.ranges = sc.ranges;
   return pv;
 }
@@ -81,8 +75,13 @@ inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
 }
 
 // Kernel selection: pick(TypesTag<kTypes>{}, FlagsTag<kFast, kStats>{})
-// instantiated for the type set and flags of the key, so each kernel is
-// compiled for exactly the primitive types a scene has.
+// instantiated for the type set of the key and its flags. The type sets
+// compiled grow linearly, not with the subsets of the types: all spheres
+// and all triangles (the hot cases, where a scene of one type never asks a
+// reference its type), and every type (kAllTypes) for any other scene. A
+// leaf or cell holds its references sorted by unified index, so each type's
+// run is found once per leaf (prim_range.h); a type the scene lacks has an
+// empty run, one comparison per leaf.
 template <unsigned kTypes>
 struct TypesTag {
   static constexpr unsigned kValue = kTypes;
@@ -100,16 +99,10 @@ KernelFn SelectFlags(const KernelKey& key, Pick pick)
 template <class Pick>
 KernelFn SelectKernel(const KernelKey& key, Pick pick)
 {
-  switch (key.types) {
-    case 1: return SelectFlags<Pick, 1>(key, pick);
-    case 2: return SelectFlags<Pick, 2>(key, pick);
-    case 3: return SelectFlags<Pick, 3>(key, pick);
-    case 4: return SelectFlags<Pick, 4>(key, pick);
-    case 5: return SelectFlags<Pick, 5>(key, pick);
-    case 6: return SelectFlags<Pick, 6>(key, pick);
-    case 7: return SelectFlags<Pick, 7>(key, pick);
-  }
-  return nullptr;  // no primitives: the tracer answers misses itself
+  if (key.types == 0) return nullptr;  // no primitives: the tracer answers misses itself
+  if (key.types == kSphereBit) return SelectFlags<Pick, kSphereBit>(key, pick);
+  if (key.types == kTriangleBit) return SelectFlags<Pick, kTriangleBit>(key, pick);
+  return SelectFlags<Pick, kAllTypes>(key, pick);
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -12,14 +12,6 @@ namespace {
 constexpr int N = CR_SIMD_WIDTH;
 constexpr int K = CR_SIMD_PACK_WIDTH;
 
-template <unsigned kTypes>
-KernelFn PickSingle(bool fast, bool stats)
-{
-  if (fast)
-    return stats ? &BVHSingle_TraceRange<N, K, kTypes, true, true> : &BVHSingle_TraceRange<N, K, kTypes, true, false>;
-  return stats ? &BVHSingle_TraceRange<N, K, kTypes, false, true> : &BVHSingle_TraceRange<N, K, kTypes, false, false>;
-}
-
 // A ray prepared as the single-ray kernels prepare it (RayPacket_Init, then
 // one lane); the scalar Ray_Init is not compiled into the ISA units.
 Ray PreparedRay(const RayRecord& rec)
@@ -58,86 +50,38 @@ void ProbePacketPrim(const KernelScene& sc, const RayRecord* rays, std::uint32_t
   fast ? ProbePacketPrimT<true>(sc, rays, g, out) : ProbePacketPrimT<false>(sc, rays, g, out);
 }
 
-// One pack of the given primitives (all of one type), built here the way
-// simd/bvh_wide_builder.cpp builds them.
+// One pack of the given primitives (all of type T), filled here the way
+// simd/bvh_wide_builder.cpp fills them, against the ray.
+template <class T, bool kFast>
+vbool<K> ProbePack(const KernelScene& sc, const PackRay<K>& pr, const std::uint32_t* gs, vfloat<K> tmax, vfloat<K>& t,
+                   vfloat<K>& u, vfloat<K>& v)
+{
+  typename SimdPrim<T>::template Pack<K> pack{};
+  for (int l = 0; l < K; ++l) {
+    pack.g[l] = gs[l];
+    if (gs[l] != CR_NO_HIT)
+      SimdPrim<T>::template Fill<K>(pack, l, PrimData<T>(sc)[Prim_Local(&sc.ranges, kPrimIndex<T>, gs[l])]);
+  }
+  const vbool<K> valid = Pack_Valid<K>(pack.g);
+  return SimdTest<T>::template Pack<K, kFast>(sc, pack, valid, pr, tmax, t, u, v) & valid;
+}
+
 template <bool kFast>
 void ProbeSinglePrimsT(const KernelScene& sc, const RayRecord& rec, const std::uint32_t* gs, ProbeResult* out)
 {
   const Ray ray = PreparedRay(rec);
   PackRay<K> pr;
   PackRay_Init<K>(pr, ray);
-  const PrimRanges& c = sc.ranges;
-  SpherePack<K> sp{};
-  TrianglePack<K> tp{};
-  ConePack<K> cp{};
-  PrimType type = PrimType::Sphere;
-  for (int l = 0; l < K; ++l) {
-    const std::uint32_t g = gs[l];
-    sp.g[l] = tp.g[l] = cp.g[l] = g;
-    if (g == CR_NO_HIT) continue;
-    type = TypeOf<7>(g, c);
-    if (type == PrimType::Sphere) {
-      for (int i = 0; i < 3; ++i) sp.center[i][l] = sc.spheres[g].center[i];
-      sp.radius[l] = sc.spheres[g].radius;
-    } else if (type == PrimType::Triangle) {
-      const Triangle& t = sc.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
-      for (int i = 0; i < 3; ++i) {
-        tp.v[0][i][l] = t.v0[i];
-        tp.v[1][i][l] = t.v1[i];
-        tp.v[2][i][l] = t.v2[i];
-      }
-      tp.flags[l] = t.flags;
-    } else {
-      const ConeData& d = sc.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
-      for (int i = 0; i < 3; ++i) {
-        cp.base[i][l] = d.base[i];
-        cp.w[i][l] = d.w[i];
-      }
-      cp.H[l] = d.H;
-      cp.r0[l] = d.r0;
-      cp.k[l] = d.k;
-    }
-  }
+  std::uint32_t any = CR_NO_HIT;
+  for (int l = 0; l < K; ++l)
+    if (gs[l] != CR_NO_HIT) any = gs[l];
   const vfloat<K> tmax(ray.tmax);
   vfloat<K> t(0.0f), u(0.0f), v(0.0f);
-  vbool<K> ok;
-  if (type == PrimType::Sphere) {
-    vfloat<K> cen[3];
-    for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(sp.center[i]);
-    ok = Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(sp.radius), pr.tmin, tmax, t);
-  } else if (type == PrimType::Triangle) {
-    if constexpr (kFast) {
-      vfloat<K> v0[3], v1[3], v2[3];
-      for (int i = 0; i < 3; ++i) {
-        v0[i] = vfloat<K>::Load(tp.v[0][i]);
-        v1[i] = vfloat<K>::Load(tp.v[1][i]);
-        v2[i] = vfloat<K>::Load(tp.v[2][i]);
-      }
-      ok = Triangle_MollerTrumboreN<K>(v0, v1, v2, pr.org, pr.dir, pr.tmin, tmax, t, u, v);
-    } else {
-      vfloat<K> A[3], B[3], C[3];
-      for (int j = 0; j < 3; ++j) {
-        A[j] = vfloat<K>::Load(tp.v[0][pr.k[j]]) - pr.orgK[j];
-        B[j] = vfloat<K>::Load(tp.v[1][pr.k[j]]) - pr.orgK[j];
-        C[j] = vfloat<K>::Load(tp.v[2][pr.k[j]]) - pr.orgK[j];
-      }
-      ok = Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{tp.v, tp.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u, v);
-    }
-  } else {
-    vfloat<K> dl[3], w[3];
-    for (int i = 0; i < 3; ++i) {
-      dl[i] = pr.org[i] - vfloat<K>::Load(cp.base[i]);
-      w[i] = vfloat<K>::Load(cp.w[i]);
-    }
-    ok = Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(cp.H), vfloat<K>::Load(cp.r0),
-                                   vfloat<K>::Load(cp.k), pr.tmin, tmax, t, [&](int l) -> const Cone* {
-                                     const std::uint32_t g = tp.g[l];
-                                     return Pack_Valid<K>(tp.g).Bits() >> l & 1u
-                                                ? &sc.coneGeometry[Prim_Local(&c, CR_PRIM_CONE, g)]
-                                                : nullptr;
-                                   });
-  }
-  ok = ok & Pack_Valid<K>(tp.g);
+  vbool<K> ok(false);
+#define CR_SIMD_PROBE_TYPE_(T, U, a) \
+  if (Prim_Is(&sc.ranges, CR_PRIM_##U, any)) ok = ProbePack<T, kFast>(sc, pr, gs, tmax, t, u, v);
+  CR_PRIM_TYPES(CR_SIMD_PROBE_TYPE_)
+#undef CR_SIMD_PROBE_TYPE_
   const unsigned bits = ok.Bits();
   for (int l = 0; l < K; ++l) {
     out[l].hit = (bits >> l) & 1u;
@@ -210,16 +154,9 @@ void ProbeSingleBoxes(const float* lo, const float* hi, const RayRecord& ray, bo
 
 KernelFn SelectSingleKernel(const KernelKey& key)
 {
-  switch (key.types) {
-    case 1: return PickSingle<1>(key.fast, key.stats);
-    case 2: return PickSingle<2>(key.fast, key.stats);
-    case 3: return PickSingle<3>(key.fast, key.stats);
-    case 4: return PickSingle<4>(key.fast, key.stats);
-    case 5: return PickSingle<5>(key.fast, key.stats);
-    case 6: return PickSingle<6>(key.fast, key.stats);
-    case 7: return PickSingle<7>(key.fast, key.stats);
-  }
-  return nullptr;
+  return SelectKernel(key, [](auto types, auto flags) -> KernelFn {
+    return &BVHSingle_TraceRange<N, K, decltype(types)::kValue, decltype(flags)::kFastValue, decltype(flags)::kStatsValue>;
+  });
 }
 
 KernelProbes Probes()

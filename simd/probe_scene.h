@@ -1,10 +1,11 @@
 // A scene for the probes of simd/simd_kernels.h (KernelProbes): the caller
-// fills `scene`, then Finish() derives the cone rows and identity ids and
+// fills `scene`, then Finish() derives the types' rows and identity ids and
 // points the KernelScene at them. Shared by tests/test_simd_intersect.cpp
 // and bench/micro_simd.cpp.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <numeric>
 #include <vector>
 
@@ -16,20 +17,16 @@ namespace cr::simd {
 
 struct ProbeScene {
   Scene scene;
-  std::vector<ConeData> cones;
+  std::unique_ptr<SimdPrimData> rows;
   std::vector<std::uint32_t> ids;
   KernelScene sc;
 
   void Finish()
   {
-    cones = MakeConeData(scene);
+    rows = std::make_unique<SimdPrimData>(scene);
+    rows->Bind(sc);
     ids.resize(scene.NumUnified());
     std::iota(ids.begin(), ids.end(), 0u);
-    sc.spheres = scene.spheres.data();
-    sc.triangles = scene.triangles.data();
-    sc.cones = cones.data();
-    sc.coneGeometry = scene.cones.data();
-    sc.ranges = scene.Ranges();
     sc.primIds = ids.data();
   }
 };

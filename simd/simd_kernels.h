@@ -15,8 +15,27 @@
 
 namespace cr::simd {
 
-// Primitive types present in a scene; traversals are instantiated per set.
-enum PrimTypeBits : unsigned { kSphereBit = 1u, kTriangleBit = 2u, kConeBit = 4u };
+// Primitive types present in a scene (bit k: type k of kernels/types.h);
+// traversals are instantiated for the sets of kernel_common.h SelectKernel.
+inline constexpr unsigned kSphereBit = 1u << CR_PRIM_SPHERE, kTriangleBit = 1u << CR_PRIM_TRIANGLE;
+inline constexpr unsigned kAllTypes = (1u << CR_NUM_PRIM_TYPES) - 1u;
+
+// A type's index k (CR_PRIM_*) from its layout.
+template <class T>
+inline constexpr unsigned kPrimIndex = ~0u;
+#define CR_SIMD_PRIM_INDEX_(T, U, a) \
+  template <>                        \
+  inline constexpr unsigned kPrimIndex<T> = CR_PRIM_##U;
+CR_PRIM_TYPES(CR_SIMD_PRIM_INDEX_)
+#undef CR_SIMD_PRIM_INDEX_
+
+// Each type's SIMD form (simd/<type>.h, listed in simd/prims.h): the rows
+// its kernels read (Data: the scene's own layout, or ray-independent terms
+// computed once), its K-wide pack of the single-ray BVH (Pack<K>), how a
+// pack lane is filled (Fill), and whether exact ties in t between two of
+// its primitives are ordered by distance (kDistanceTies, robust mode).
+template <class T>
+struct SimdPrim;
 
 // The structure a kernel walks.
 enum class KernelAccel { BVH, Grid, Octree };
@@ -37,14 +56,12 @@ struct KernelScene {
   // N-wide BVH (single-ray path) of the ISA's width, and its K-wide leaf packs.
   const void* wideNodes = nullptr;  // WideNode<N>
   const WideLeaf* wideLeaves = nullptr;
-  const void* spherePacks = nullptr;    // SpherePack<K>
-  const void* trianglePacks = nullptr;  // TrianglePack<K>
-  const void* conePacks = nullptr;      // ConePack<K>
-  // Primitives by type (unified index g as in kernels/types.h).
-  const Sphere* spheres = nullptr;
-  const Triangle* triangles = nullptr;
-  const ConeData* cones = nullptr;
-  const Cone* coneGeometry = nullptr;  // the scene's cones (Cone_IntersectN's double-float cold path)
+  const void* packs[CR_NUM_PRIM_TYPES] = {};  // SimdPrim<T>::Pack<K> of type k
+  // Primitives by type (unified index g as in kernels/types.h): the scene's
+  // arrays (the double-float cold paths start from them) and the rows the
+  // kernels read (SimdPrim<T>::Data; the scene's array where that is T).
+  const void* prims[CR_NUM_PRIM_TYPES] = {};
+  const void* data[CR_NUM_PRIM_TYPES] = {};
   PrimRanges ranges{};
   const std::uint32_t* primIds = nullptr;  // scene id of every g
   int unifiedHits = 0;                     // TraceConfig::unifiedHits
@@ -68,11 +85,25 @@ struct KernelJob {
   TraceStatsSum* stats = nullptr;  // non-null for statistics kernels
 };
 
+// Type T's arrays of `sc`. Always inlined: the ISA units call them, and no
+// function of theirs may be emitted outside their ISA namespace.
+#define CR_SIMD_HOST_INLINE inline __attribute__((always_inline))
+template <class T>
+CR_SIMD_HOST_INLINE const T* ScenePrims(const KernelScene& sc)
+{
+  return static_cast<const T*>(sc.prims[kPrimIndex<T>]);
+}
+template <class T>
+CR_SIMD_HOST_INLINE const typename SimdPrim<T>::Data* PrimData(const KernelScene& sc)
+{
+  return static_cast<const typename SimdPrim<T>::Data*>(sc.data[kPrimIndex<T>]);
+}
+
 using KernelFn = void (*)(const KernelScene&, const KernelJob&);
 
 struct KernelKey {
   KernelAccel accel = KernelAccel::BVH;
-  unsigned types = 0;   // PrimTypeBits, 1..7
+  unsigned types = 0;   // PrimTypeBits of the scene's types
   bool fast = false;    // Precision::Fast (else robust)
   bool stats = false;   // counts Havran's measures
   bool packet = false;  // ray packets (else one ray at a time)

@@ -48,7 +48,7 @@ Variant ParseVariant(const std::string& s)
 }
 
 // A set is coherent when at least this fraction of sampled groups of
-// consecutive rays share a narrow direction cone: packets, no question
+// consecutive rays share nearly one direction: packets, no question
 // (primary rays measure 0.96-1.0; shadow, diffuse and random rays 0-0.02,
 // and for those the pilot below decides).
 constexpr double kAutoPacketFraction = 0.5;
@@ -110,15 +110,16 @@ class SimdTracer final : public Tracer {
     const IsaEntry e = EntryOf(isa);
     const KernelProbes probes = e.probes();
     width_ = probes.width;
-    cones_ = MakeConeData(scene);
     const auto t0 = std::chrono::steady_clock::now();
+    rows_ = std::make_unique<SimdPrimData>(scene);
+    rows_->Bind(sc_);
     if (variant_ != Variant::Packet && cfg.accel == AccelKind::BVH) {
-      wide_ = BuildWideBVH(data_.bvh, scene, cones_, probes.width, probes.packWidth);
+      wide_ = BuildWideBVH(data_.bvh, sc_, probes.width, probes.packWidth);
       info_.bytes += wide_->Bytes();
       info_.params += fmt::format(" simd=bvh{}x{} wide_nodes={} wide_bytes={}", probes.width, probes.packWidth,
                                   wide_->Nodes(), wide_->Bytes());
     }
-    info_.bytes += cones_.size() * sizeof(ConeData);
+    info_.bytes += rows_->Bytes();
     info_.buildMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
     sc_.nodes = data_.bvh.nodes.data();
@@ -130,18 +131,13 @@ class SimdTracer final : public Tracer {
     sc_.octreeNodes = data_.octree.nodes.data();
     sc_.octreeRefs = data_.octree.refs.data();
     if (wide_) wide_->Bind(sc_);
-    sc_.spheres = scene.spheres.data();
-    sc_.triangles = scene.triangles.data();
-    sc_.cones = cones_.data();
-    sc_.coneGeometry = scene.cones.data();
-    sc_.ranges = scene.Ranges();
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
 
     KernelKey key;
     key.accel = KernelAccelOf(cfg.accel);
-    key.types = (scene.spheres.empty() ? 0u : kSphereBit) | (scene.triangles.empty() ? 0u : kTriangleBit) |
-                (scene.cones.empty() ? 0u : kConeBit);
+    key.types = 0;
+    scene.ForEachType([&](const auto& pieces, std::uint32_t k) { key.types |= pieces.empty() ? 0u : 1u << k; });
     key.fast = cfg.precision == Precision::Fast;
     key.stats = cfg.stats;
     key.packet = true;
@@ -226,7 +222,7 @@ class SimdTracer final : public Tracer {
   Variant variant_;
   AccelData data_;
   std::vector<std::uint32_t> primIds_;
-  std::vector<ConeData> cones_;
+  std::unique_ptr<SimdPrimData> rows_;
   std::unique_ptr<WideBVHBase> wide_;
   KernelScene sc_;
   KernelFn packetFn_ = nullptr, singleFn_ = nullptr;
