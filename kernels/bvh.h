@@ -4,14 +4,24 @@
 #define CELLRAY_KERNELS_BVH_H
 #include "intersect.h"
 
+/* Compiled unless the build is for one other structure (CR_ACCEL_ONE, see
+ * trace.cl); CR_WITH_BVH tells the generated dispatch (CR_IF_WITH). */
+#if !defined(CR_ACCEL_ONE) || defined(CR_ACCEL_BVH)
+#define CR_WITH_BVH 1
+#else
+#define CR_WITH_BVH 0
+#endif
+#if CR_WITH_BVH
+
 /* Deep enough for the builder's depth limit (host/accel/bvh_builder.cpp). */
 #define CR_BVH_STACK 64
 
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * BVH; `hit` must come from Hit_Init. */
-CR_FUNC void BVH_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray,
-                       Hit* hit, int anyHit, TraceStats* st)
+CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs,
+                       const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
 {
+  (void)hdr;
   uint stackNode[CR_BVH_STACK];
   real stackT[CR_BVH_STACK];
   int sp = 0;
@@ -66,4 +76,5 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* ref
   }
 }
 
+#endif /* CR_WITH_BVH */
 #endif /* CELLRAY_KERNELS_BVH_H */

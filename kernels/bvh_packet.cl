@@ -21,6 +21,7 @@
 #define CELLRAY_KERNELS_BVH_PACKET_CL
 #include "bvh.h"
 #include "packet.cl"
+#if CR_WITH_BVH
 
 #define CR_PACKET_END 0xFFFFFFFFu
 
@@ -172,4 +173,17 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
   }
 }
 
+/* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
+ * this traversal's local memory, as kernel-scope declarations, parameters
+ * and arguments, and its call (the names are Trace_Packet's). */
+#define CR_PACKET_LOCALS_BVH            \
+  __local uint sBvhStack[CR_BVH_STACK]; \
+  __local float sBvhNode[CR_PACKET_NODE_FIELDS];
+#define CR_PACKET_PARAMS_BVH , __local uint *sBvhStack, __local float *sBvhNode
+#define CR_PACKET_ARGS_BVH , sBvhStack, sBvhNode
+#define CR_PACKET_CALL_BVH(hdr, nodes, refs)                                                                    \
+  BVHPacket_Trace(nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState, sBvhNode, sRay, \
+                  sAxes, sHit, sHitG)
+
+#endif /* CR_WITH_BVH */
 #endif /* CELLRAY_KERNELS_BVH_PACKET_CL */

@@ -22,6 +22,15 @@
 #define CELLRAY_KERNELS_GRID_H
 #include "intersect.h"
 
+/* Compiled unless the build is for one other structure (CR_ACCEL_ONE, see
+ * trace.cl); CR_WITH_GRID tells the generated dispatch (CR_IF_WITH). */
+#if !defined(CR_ACCEL_ONE) || defined(CR_ACCEL_GRID)
+#define CR_WITH_GRID 1
+#else
+#define CR_WITH_GRID 0
+#endif
+#if CR_WITH_GRID
+
 /* Plane i (0..res[axis]) of the grid along `axis`. Computed in float in every
  * precision mode: the builder (host/accel/grid_builder.cpp) and the fp32 and
  * fp64 traversals all see the same planes, to the bit. The grid box is
@@ -124,4 +133,5 @@ CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* 
   } while (Grid_Next(grid, ray, hit->t, cell));
 }
 
+#endif /* CR_WITH_GRID */
 #endif /* CELLRAY_KERNELS_GRID_H */

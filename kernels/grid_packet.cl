@@ -26,6 +26,7 @@
 #define CELLRAY_KERNELS_GRID_PACKET_CL
 #include "grid.h"
 #include "packet.cl"
+#if CR_WITH_GRID
 
 /* Local words of sState that the grid packet uses: the "some lane is
  * active" flags of two consecutive iterations. */
@@ -119,4 +120,17 @@ CR_FUNC void GridPacket_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const 
   }
 }
 
+/* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
+ * this traversal's local memory, as kernel-scope declarations, parameters
+ * and arguments, and its call (the names are Trace_Packet's). */
+#define CR_PACKET_LOCALS_GRID                \
+  __local int sGridCell[3 * CR_PACKET_SIZE]; \
+  __local uint sGridRange[2 * CR_PACKET_SIZE];
+#define CR_PACKET_PARAMS_GRID , __local int *sGridCell, __local uint *sGridRange
+#define CR_PACKET_ARGS_GRID , sGridCell, sGridRange
+#define CR_PACKET_CALL_GRID(hdr, nodes, refs)                                                                     \
+  GridPacket_Trace(hdr, nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState, sGridCell, sGridRange, \
+                   sRay, sAxes, sHit, sHitG)
+
+#endif /* CR_WITH_GRID */
 #endif /* CELLRAY_KERNELS_GRID_PACKET_CL */

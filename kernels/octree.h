@@ -22,6 +22,15 @@
 #define CELLRAY_KERNELS_OCTREE_H
 #include "intersect.h"
 
+/* Compiled unless the build is for one other structure (CR_ACCEL_ONE, see
+ * trace.cl); CR_WITH_OCTREE tells the generated dispatch (CR_IF_WITH). */
+#if !defined(CR_ACCEL_ONE) || defined(CR_ACCEL_OCTREE)
+#define CR_WITH_OCTREE 1
+#else
+#define CR_WITH_OCTREE 0
+#endif
+#if CR_WITH_OCTREE
+
 /* Deepest level the builder may create (host/accel/octree_builder.cpp checks
  * --octree-depth against it). Interior nodes lie at levels < this, so it also
  * bounds the traversal stack. Beyond 20 levels a cell (2^-20 of the root) is
@@ -179,4 +188,5 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   }
 }
 
+#endif /* CR_WITH_OCTREE */
 #endif /* CELLRAY_KERNELS_OCTREE_H */

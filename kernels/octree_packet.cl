@@ -28,6 +28,7 @@
 #define CELLRAY_KERNELS_OCTREE_PACKET_CL
 #include "octree.h"
 #include "packet.cl"
+#if CR_WITH_OCTREE
 
 /* Stack entries: a node pushes at most its eight children and the visit
  * pops one, so each interior level below the root adds at most seven. */
@@ -189,4 +190,17 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
   }
 }
 
+/* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
+ * this traversal's local memory, as kernel-scope declarations, parameters
+ * and arguments, and its call (the names are Trace_Packet's). */
+#define CR_PACKET_LOCALS_OCTREE                                            \
+  __local uint sOctStack[CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY]; \
+  __local float sOctPlane[CR_OCTREE_PACKET_PLANES];
+#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack, __local float *sOctPlane
+#define CR_PACKET_ARGS_OCTREE , sOctStack, sOctPlane
+#define CR_PACKET_CALL_OCTREE(hdr, nodes, refs)                                                                 \
+  OctreePacket_Trace(hdr, nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane,    \
+                     sState, sRay, sAxes, sHit, sHitG)
+
+#endif /* CR_WITH_OCTREE */
 #endif /* CELLRAY_KERNELS_OCTREE_PACKET_CL */

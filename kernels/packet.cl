@@ -1,8 +1,7 @@
 /* What every packet traversal shares (OpenCL only): a work-group is a packet
  * of rays that walks a structure together, with barriers between the steps
  * and every loop condition read from local memory, so that all work-items
- * take the same path (kernels/bvh_packet.cl, grid_packet.cl,
- * octree_packet.cl). PoCL's work-item loops around such straight-line steps
+ * take the same path (each structure's kernels/<lower>_packet.cl). PoCL's work-item loops around such straight-line steps
  * can be vectorised; a loop whose trip count differs per work-item cannot.
  *
  * The packet's rays and hits live in local memory, one array per field

@@ -4,9 +4,10 @@
  *   CR_FP64 | CR_FAST                 precision (intersect.h); default robust
  *   CR_HAS_<TYPE> = 0|1               primitive types present (default 1;
  *                                     kernels/types.h CR_PRIM_TYPES, CR_IF)
- *   CR_ACCEL_BVH | CR_ACCEL_GRID | CR_ACCEL_OCTREE
- *                                     the one traversal compiled; none: all
- *                                     three, chosen by the `accel` argument
+ *   CR_ACCEL_ONE, CR_ACCEL_<UPPER>   the one traversal compiled (its name
+ *                                     in kernels/types.h CR_ACCEL_TYPES);
+ *                                     none: all, chosen by the `accel`
+ *                                     argument (CR_ACCEL_ID_*)
  *   CR_ANYHIT = 0|1                   occlusion query; absent: argument
  *   CR_UNIFIED = 0|1                  unified hit records; absent: argument
  *   CR_STATS                          per-ray counters written to `stats`
@@ -51,47 +52,30 @@ typedef float4 camreal4;
 #endif
 #define CR_PACKET_SIZE (CR_PACKET_W * CR_PACKET_H)
 
-#if defined(CR_ACCEL_BVH) || !(defined(CR_ACCEL_GRID) || defined(CR_ACCEL_OCTREE))
-#define CR_WITH_BVH 1
-#include "bvh.h"
-#endif
-#if defined(CR_ACCEL_GRID) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_OCTREE))
-#define CR_WITH_GRID 1
-#include "grid.h"
-#endif
-#if defined(CR_ACCEL_OCTREE) || !(defined(CR_ACCEL_BVH) || defined(CR_ACCEL_GRID))
-#define CR_WITH_OCTREE 1
-#include "octree.h"
-#endif
-#if !defined(CR_VARIANT_RAY)
-#ifdef CR_WITH_BVH
-#include "bvh_packet.cl"
-#endif
-#ifdef CR_WITH_GRID
-#include "grid_packet.cl"
-#endif
-#ifdef CR_WITH_OCTREE
-#include "octree_packet.cl"
-#endif
-#endif
+#include "accels.h"
 
-/* Argument values of the `accel` parameter (generic build). */
-#define CR_ACCEL_ARG_GRID 0
-#define CR_ACCEL_ARG_OCTREE 1
-#define CR_ACCEL_ARG_BVH 2
+/* Whether structure U is the one traced: in a build for one structure
+ * (CR_ACCEL_ONE) the one compiled, else the `accel` argument's. CR_IF_WITH
+ * keeps a structure's code only where the build compiles it. */
+#ifdef CR_ACCEL_ONE
+#define CR_ACCEL_TAKEN(U) 1
+#else
+#define CR_ACCEL_TAKEN(U) (accel == CR_ACCEL_ID_##U)
+#endif
+#define CR_IF_WITH(U, ...) CR_CAT(CR_IF_, CR_WITH_##U)(__VA_ARGS__)
 
 /* The scene and structure arguments of every kernel, in binding order
  * (host/cl/cl_tracer.cpp binds them by these positions): for each primitive
  * type of CR_PRIM_TYPES its array and its count (arguments 2k and 2k + 1),
- * then the primitive ids and the structures. */
+ * the primitive ids, for each structure of CR_ACCEL_TYPES its header, nodes
+ * and references (3 arguments each), then accel, anyHitArg, unifiedArg. */
 #define CR_PRIM_PARAM_(T, U, a) CR_GLOBAL const T *a, uint a##Count,
 #define CR_PRIM_ARG_(T, U, a) a, a##Count,
+#define CR_ACCEL_PARAM_(N, U, l, H, Nd) CR_GLOBAL const H *l##Header, CR_GLOBAL const Nd *l##Nodes, CR_GLOBAL const uint *l##Refs,
+#define CR_ACCEL_ARG_(N, U, l, H, Nd) l##Header, l##Nodes, l##Refs,
 #define CR_SCENE_PARAMS                                                                                         \
   CR_PRIM_TYPES(CR_PRIM_PARAM_)                                                                                \
-  CR_GLOBAL const uint *primIds, CR_GLOBAL const BVHNode *bvhNodes, CR_GLOBAL const uint *bvhRefs, CR_GLOBAL const GridHeader *grid,        \
-      CR_GLOBAL const uint *cellStart, CR_GLOBAL const uint *gridRefs, CR_GLOBAL const OctreeHeader *octree,     \
-      CR_GLOBAL const OctreeNode *octNodes, CR_GLOBAL const uint *octRefs, int accel, int anyHitArg, int unifiedArg
-
+  CR_GLOBAL const uint *primIds, CR_ACCEL_TYPES(CR_ACCEL_PARAM_) int accel, int anyHitArg, int unifiedArg
 #ifdef CR_ANYHIT
 #define CR_QUERY_ANYHIT CR_ANYHIT
 #else
@@ -176,39 +160,27 @@ CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceSt
 }
 
 /* The structure arguments of Trace_One and Trace_Packet, by name. */
-#define CR_TRACE_ONE_ARGS bvhNodes, bvhRefs, grid, cellStart, gridRefs, octree, octNodes, octRefs, accel
+#define CR_TRACE_ONE_PARAMS CR_ACCEL_TYPES(CR_ACCEL_PARAM_) int accel
+#define CR_TRACE_ONE_ARGS CR_ACCEL_TYPES(CR_ACCEL_ARG_) accel
 
 #if !defined(CR_VARIANT_PACKET)
 
 /* Ray record i through the structure the build (or `accel`) selects; its
  * answer to hits[i], its counters to stats (when counted). anyHitArg and
  * unifiedArg are read only by a generic build (CR_QUERY_*). */
-CR_FUNC void Trace_One(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
-                       CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart,
-                       CR_GLOBAL const uint* gridRefs, CR_GLOBAL const OctreeHeader* octree,
-                       CR_GLOBAL const OctreeNode* octNodes, CR_GLOBAL const uint* octRefs, int accel,
-                       CR_GLOBAL const uint* primIds, int anyHitArg, int unifiedArg, const RayRecord* rec, uint i,
-                       CR_GLOBAL HitRecord* hits, CR_GLOBAL TraceStats* stats)
+CR_FUNC void Trace_One(const PrimView* pv, CR_TRACE_ONE_PARAMS, CR_GLOBAL const uint* primIds, int anyHitArg,
+                       int unifiedArg, const RayRecord* rec, uint i, CR_GLOBAL HitRecord* hits,
+                       CR_GLOBAL TraceStats* stats)
 {
   Ray ray;
   Ray_Init(&ray, rec);
   Hit hit;
   Hit_Init(&hit, &ray);
   TraceStats st = {0, 0, 0, 0};
-#if defined(CR_ACCEL_BVH)
-  BVH_Trace(bvhNodes, bvhRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-#elif defined(CR_ACCEL_GRID)
-  Grid_Trace(grid, cellStart, gridRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-#elif defined(CR_ACCEL_OCTREE)
-  Octree_Trace(octree, octNodes, octRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-#else
-  if (accel == CR_ACCEL_ARG_BVH)
-    BVH_Trace(bvhNodes, bvhRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-  else if (accel == CR_ACCEL_ARG_GRID)
-    Grid_Trace(grid, cellStart, gridRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-  else
-    Octree_Trace(octree, octNodes, octRefs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);
-#endif
+#define CR_TRACE_ONE_(N, U, l, H, Nd)                                                                     \
+  CR_IF_WITH(U, if (CR_ACCEL_TAKEN(U)) N##_Trace(l##Header, l##Nodes, l##Refs, pv, &ray, &hit, CR_QUERY_ANYHIT, &st);)
+  CR_ACCEL_TYPES(CR_TRACE_ONE_)
+#undef CR_TRACE_ONE_
   Trace_StoreHit(hits, i, Hit_ToRecord(&hit, pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
   Trace_StoreStats(stats, i, &st);
 }
@@ -264,51 +236,17 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   __local uint *sLane, __local uint *sState, __local real *sRay, __local uint *sAxes, __local real *sHit, \
       __local uint *sHitG
 #define CR_PACKET_ARGS_COMMON sLane, sState, sRay, sAxes, sHit, sHitG
-#ifdef CR_WITH_BVH
-#define CR_PACKET_LOCALS_BVH         \
-  __local uint sBvhStack[CR_BVH_STACK]; \
-  __local float sBvhNode[CR_PACKET_NODE_FIELDS];
-#define CR_PACKET_PARAMS_BVH , __local uint *sBvhStack, __local float *sBvhNode
-#define CR_PACKET_ARGS_BVH , sBvhStack, sBvhNode
-#else
-#define CR_PACKET_LOCALS_BVH
-#define CR_PACKET_PARAMS_BVH
-#define CR_PACKET_ARGS_BVH
-#endif
-#ifdef CR_WITH_GRID
-#define CR_PACKET_LOCALS_GRID                   \
-  __local int sGridCell[3 * CR_PACKET_SIZE];    \
-  __local uint sGridRange[2 * CR_PACKET_SIZE];
-#define CR_PACKET_PARAMS_GRID , __local int *sGridCell, __local uint *sGridRange
-#define CR_PACKET_ARGS_GRID , sGridCell, sGridRange
-#else
-#define CR_PACKET_LOCALS_GRID
-#define CR_PACKET_PARAMS_GRID
-#define CR_PACKET_ARGS_GRID
-#endif
-#ifdef CR_WITH_OCTREE
-#define CR_PACKET_LOCALS_OCTREE                                          \
-  __local uint sOctStack[CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY]; \
-  __local float sOctPlane[CR_OCTREE_PACKET_PLANES];
-#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack, __local float *sOctPlane
-#define CR_PACKET_ARGS_OCTREE , sOctStack, sOctPlane
-#else
-#define CR_PACKET_LOCALS_OCTREE
-#define CR_PACKET_PARAMS_OCTREE
-#define CR_PACKET_ARGS_OCTREE
-#endif
-#define CR_PACKET_LOCALS \
-  CR_PACKET_LOCALS_BVH CR_PACKET_LOCALS_GRID CR_PACKET_LOCALS_OCTREE CR_PACKET_LOCALS_COMMON
-#define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_PACKET_PARAMS_BVH CR_PACKET_PARAMS_GRID CR_PACKET_PARAMS_OCTREE
-#define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_PACKET_ARGS_BVH CR_PACKET_ARGS_GRID CR_PACKET_ARGS_OCTREE
+#define CR_PACKET_LOCALS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_LOCALS_##U)
+#define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_PARAMS_##U)
+#define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_ARGS_##U)
+#define CR_PACKET_LOCALS CR_ACCEL_TYPES(CR_PACKET_LOCALS_) CR_PACKET_LOCALS_COMMON
+#define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_ACCEL_TYPES(CR_PACKET_PARAMS_)
+#define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_ACCEL_TYPES(CR_PACKET_ARGS_)
 
 /* The hit of one lane's ray after the group's packet traversal of the
  * structure the build (or `accel`, the same for the whole group) selects. */
-CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, CR_GLOBAL const uint* bvhRefs,
-                         CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart,
-                         CR_GLOBAL const uint* gridRefs, CR_GLOBAL const OctreeHeader* octree,
-                         CR_GLOBAL const OctreeNode* octNodes, CR_GLOBAL const uint* octRefs, int accel,
-                         const RayRecord* rec, int live, uint lid, int anyHit, TraceStats* st, CR_PACKET_PARAMS)
+CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecord* rec, int live, uint lid, int anyHit,
+                         TraceStats* st, CR_PACKET_PARAMS)
 {
   Ray ray;
   Ray_Init(&ray, rec);
@@ -316,33 +254,17 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_GLOBAL const BVHNode* bvhNodes, 
   Hit_Init(&hit, &ray);
   Packet_StoreRay(sRay, sAxes, lid, CR_PACKET_SIZE, &ray);
   Packet_StoreHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
-#if defined(CR_ACCEL_BVH)
-  BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState, sBvhNode,
-                  sRay, sAxes, sHit, sHitG);
-#elif defined(CR_ACCEL_GRID)
-  GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState, sGridCell,
-                   sGridRange, sRay, sAxes, sHit, sHitG);
-#elif defined(CR_ACCEL_OCTREE)
-  OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane, sState,
-                     sRay, sAxes, sHit, sHitG);
-#else
-  if (accel == CR_ACCEL_ARG_BVH)
-    BVHPacket_Trace(bvhNodes, bvhRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState,
-                    sBvhNode, sRay, sAxes, sHit, sHitG);
-  else if (accel == CR_ACCEL_ARG_GRID)
-    GridPacket_Trace(grid, cellStart, gridRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState,
-                     sGridCell, sGridRange, sRay, sAxes, sHit, sHitG);
-  else
-    OctreePacket_Trace(octree, octNodes, octRefs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane,
-                       sState, sRay, sAxes, sHit, sHitG);
-#endif
+#define CR_TRACE_PACKET_(N, U, l, H, Nd) \
+  CR_IF_WITH(U, if (CR_ACCEL_TAKEN(U)) CR_PACKET_CALL_##U(l##Header, l##Nodes, l##Refs);)
+  CR_ACCEL_TYPES(CR_TRACE_PACKET_)
+#undef CR_TRACE_PACKET_
   Packet_LoadHit(sHit, sHitG, lid, CR_PACKET_SIZE, &hit);
   return hit;
 }
 
 #ifndef CR_SOURCE_CAMERA
 /* Packet variant: the work-group is a packet (consecutive rays) that walks the
- * structure together (bvh_packet.cl, grid_packet.cl, octree_packet.cl).
+ * structure together (its kernels/<lower>_packet.cl).
  * Lanes past nRays take part without a ray. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
     CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,

@@ -107,6 +107,32 @@ CR_FUNC uint Prim_Local(const PrimRanges* r, uint k, uint g) { return g - r->beg
 CR_FUNC uint Prim_End(const PrimRanges* r, uint k) { return r->begin[k + 1u]; }
 CR_FUNC uint Prim_Count(const PrimRanges* r, uint k) { return r->begin[k + 1u] - r->begin[k]; }
 
+/* The structures, one entry each, in the order of their `accel` argument
+ * values (CR_ACCEL_ID_*) and of the host's AccelKind:
+ * X(Name, UPPER, lower, Header, Node): the flat layout (one Header record,
+ * an array of Node, the references), its traversals Name_Trace(header,
+ * nodes, refs, pv, ray, hit, anyHit, stats) in kernels/<lower>.h and
+ * NamePacket_Trace in kernels/<lower>_packet.cl (both included by
+ * kernels/accels.h), its build option CR_ACCEL_<UPPER>, its builder
+ * Build<Name> (host/accel/), its SIMD kernels Select<Name>Kernel (simd/). The
+ * kernel arguments, the dispatch of every backend and the lists the CLI,
+ * bench and tests iterate are generated from this list. */
+#define CR_ACCEL_TYPES(X)                                      \
+  X(Grid, GRID, grid, GridHeader, uint)                        \
+  X(Octree, OCTREE, octree, OctreeHeader, OctreeNode)          \
+  X(BVH, BVH, bvh, BVHHeader, BVHNode)
+#define CR_ACCEL_ID_(N, U, l, H, Nd) CR_ACCEL_ID_##U,
+enum { CR_ACCEL_TYPES(CR_ACCEL_ID_) CR_NUM_ACCEL_TYPES };
+#undef CR_ACCEL_ID_
+
+/* BVH header, 16 bytes: the counts of its arrays (the traversal needs none;
+ * the record keeps the structures' flat layouts alike). */
+typedef struct {
+  uint nNodes;
+  uint nRefs;
+  uint pad[2];
+} BVHHeader;
+
 /* BVH node, 32 bytes (pbrt's LinearBVHNode shape). count == 0: interior node
  * whose children are nodes `first` and `first + 1`; count > 0: leaf holding
  * references [first, first + count). Node 0 is the root. */
@@ -167,6 +193,7 @@ static_assert(sizeof(Sphere) == 16);
 static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
 static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
 static_assert(sizeof(PrimRanges) % 16 == 0);
+static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);
 static_assert(sizeof(GridHeader) == 64 && offsetof(GridHeader, res) == 48);
 static_assert(sizeof(OctreeNode) == 16);

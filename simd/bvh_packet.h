@@ -104,8 +104,8 @@ CR_SIMD_INLINE void BVHPacket_Trace(const KernelScene& sc, const RayPacket<N>& P
   };
   Entry stack[kBVHStack];
   int sp = 0;
-  const BVHNode* nodes = sc.nodes;
-  const std::uint32_t* refs = sc.refs;
+  const BVHNode* nodes = sc.bvhNodes;
+  const std::uint32_t* refs = sc.bvhRefs;
   unsigned done = 0;  // occlusion: lanes with an occluder
   vfloat<N> tEnter;
   vbool<N> m = active & PacketBox_Intersect<N, kFast>(nodes[0], P, CullDistance<kFast, N>(H.t), tEnter);

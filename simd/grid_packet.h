@@ -33,7 +33,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> active,
                                      int anyHit, TraceStatsSum& st)
 {
-  const GridHeader& g = *sc.grid;
+  const GridHeader& g = *sc.gridHeader;
   if (g.nRefs == 0u) return;
   vint<N> cell[3];
   vbool<N> live = GridPacket_Enter<N, kFast>(g, P, H, active, cell);
@@ -58,7 +58,7 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
     dIdx[a] = Select(down, vint<N>(-stride[a]), vint<N>(stride[a]));
   }
   vint<N> idx = cell[0] + vint<N>(stride[1]) * cell[1] + vint<N>(stride[2]) * cell[2];
-  const std::uint32_t* cellStart = sc.cellStart;
+  const std::uint32_t* cellStart = sc.gridNodes;
   const std::uint32_t* refs = sc.gridRefs;
   for (;;) {
     const unsigned liveBits = live.Bits();

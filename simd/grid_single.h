@@ -19,7 +19,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   const PrimView pv = MakePrimView(sc);
-  const GridHeader& g = *sc.grid;
+  const GridHeader& g = *sc.gridHeader;
   TraceStatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];

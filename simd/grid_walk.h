@@ -80,7 +80,7 @@ template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], int anyHit,
                                     TraceStatsSum& st)
 {
-  const GridHeader& g = *sc.grid;
+  const GridHeader& g = *sc.gridHeader;
   PackRay<4> pr;
   PackRay_Init<4>(pr, ray);
   // Per axis: cell coordinate, step, exit plane crossing, and the change of
@@ -101,7 +101,7 @@ CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& 
       ++st.nTS;
       ++st.nLeaves;
     }
-    const std::uint32_t begin = sc.cellStart[idx], end = sc.cellStart[idx + 1];
+    const std::uint32_t begin = sc.gridNodes[idx], end = sc.gridNodes[idx + 1];
     if (begin == end) {
       if constexpr (kStats) ++st.nEmptyLeaves;
     } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.gridRefs, begin, end, pr, hit, anyHit, st) && anyHit) {

@@ -6,6 +6,9 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
+// Direction classes pay on long walks (GridClassOrderPays).
+PacketOrder GridPacketOrder() { return PacketOrder::DirectionClassesWhenPays; }
+
 KernelFn SelectGridKernel(const KernelKey& key)
 {
   constexpr int N = CR_SIMD_WIDTH;

@@ -6,6 +6,10 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
+// A packet is traced once per class of direction signs among its lanes
+// (octree_packet.h): packets of one class.
+PacketOrder OctreePacketOrder() { return PacketOrder::DirectionClasses; }
+
 KernelFn SelectOctreeKernel(const KernelKey& key)
 {
   constexpr int N = CR_SIMD_WIDTH;

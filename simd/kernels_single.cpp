@@ -159,6 +159,10 @@ KernelFn SelectSingleKernel(const KernelKey& key)
   });
 }
 
+KernelFn SelectBVHKernel(const KernelKey& key) { return key.packet ? SelectPacketKernel(key) : SelectSingleKernel(key); }
+// Coherent sets only take packets (the pilot decides the rest).
+PacketOrder BVHPacketOrder() { return PacketOrder::Input; }
+
 KernelProbes Probes()
 {
   KernelProbes p;

@@ -104,7 +104,7 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
                                             unsigned lanes, unsigned signMask, int anyHit, TraceStatsSum& st)
 {
-  const OctreeHeader& hdr = *sc.octree;
+  const OctreeHeader& hdr = *sc.octreeHeader;
   const OctreeNode* nodes = sc.octreeNodes;
   OctreeFrame<N> fr[kOctreeMaxDepth + 1];
   int d = 0;

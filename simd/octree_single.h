@@ -25,7 +25,7 @@ CR_SIMD_INLINE float FMinS(float a, float b) { return a < b ? a : b; }
 template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
 {
-  const OctreeHeader& hdr = *sc.octree;
+  const OctreeHeader& hdr = *sc.octreeHeader;
   const OctreeNode* nodes = sc.octreeNodes;
   std::uint32_t signMask = 0u;
   for (int a = 0; a < 3; ++a)

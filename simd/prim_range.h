@@ -1,4 +1,4 @@
-// A range of references refs[begin, end) (a grid cell, an octree leaf) tested
+// A range of references refs[begin, end) (a cell, a leaf) tested
 // type by type. References are unified indices sorted ascending, so the
 // types come in runs (in CR_PRIM_TYPES order, kernels/types.h):
 // each run is found once and tested with a loop of one type, and only the
@@ -9,7 +9,7 @@
 //  - PacketRefs_Intersect: N rays, one primitive at a time (packets);
 //  - RayRefs_Intersect: one ray, K = 4 primitives at a time, gathered from
 //    the types' rows (SimdPrim<T>::Data, rows of 16 bytes) by
-//    4x4 transposes, so the grid and the octree need no structure-of-arrays
+//    4x4 transposes, so the cell walks need no structure-of-arrays
 //    copy of the geometry (the BVH's single-ray path keeps packs instead,
 //    docs/SIMD.md compares the memory).
 // The K hits of a group are reduced in Hit_Closer order (nearer t, then the
@@ -171,7 +171,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
   }
 }
 
-// The references of a grid cell or octree leaf against the lanes of m that
+// The references of a cell or leaf of a cell walk against the lanes of m that
 // stand in it: lane by lane (LaneRefs_Intersect) when only one or two lanes
 // do and there are four references or more, else one packet pass
 // (PacketRefs_Intersect). Measured on gears (grid) 4-7% faster than packet

@@ -6,7 +6,7 @@
 //   Packet<N, kFast>(sc, g, P, tmax, t, u, v)   primitive g, N rays (packets)
 //   Pack<K, kFast>(sc, pack, valid, pr, ...)    K primitives of a pack, 1 ray
 //   Gather<kFast>(sc, g[4], pr, ...)            4 primitives gathered from
-//                                               their rows (grid, octree)
+//                                               their rows (cell walks)
 // Each returns the lanes that hit in [tmin, tmax] with their t (u, v where
 // the type reports them); the traversals keep the closest (Hit_Closer).
 #pragma once

@@ -24,8 +24,8 @@ std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tile
 
 // Ray indices grouped by direction class (the signs of the three direction
 // components and the dominant axis: 24 classes), in input order inside each
-// class: a stable counting sort. Octree packets are traced once per class of
-// direction signs among their lanes (simd/octree_packet.h), so on
+// class: a stable counting sort. Some packet traversals run once per class
+// of direction signs among their lanes (simd_kernels.h PacketOrder), so on
 // incoherent sets (shadow rays towards several lights, diffuse and random
 // rays) this turns passes of one or two lanes into passes of full packets.
 std::vector<std::uint32_t> DirectionClassOrder(const std::vector<RayRecord>& rays);

@@ -37,22 +37,22 @@ CR_PRIM_TYPES(CR_SIMD_PRIM_INDEX_)
 template <class T>
 struct SimdPrim;
 
-// The structure a kernel walks.
-enum class KernelAccel { BVH, Grid, Octree };
+// The structure a kernel walks: the order of kernels/types.h
+// CR_ACCEL_TYPES (and of the host's AccelKind).
+#define CR_SIMD_ACCEL_ENUM_(N, U, l, H, Nd) N,
+enum class KernelAccel { CR_ACCEL_TYPES(CR_SIMD_ACCEL_ENUM_) };
+#undef CR_SIMD_ACCEL_ENUM_
 
 // Everything a kernel reads, as raw pointers into arrays the tracer owns.
 struct KernelScene {
-  // Binary BVH (packet path), kernels/types.h layout.
-  const BVHNode* nodes = nullptr;
-  const std::uint32_t* refs = nullptr;
-  // Uniform grid (GridHeader, nCells + 1 cell offsets, references).
-  const GridHeader* grid = nullptr;
-  const std::uint32_t* cellStart = nullptr;
-  const std::uint32_t* gridRefs = nullptr;
-  // Octree (OctreeHeader, nodes, references).
-  const OctreeHeader* octree = nullptr;
-  const OctreeNode* octreeNodes = nullptr;
-  const std::uint32_t* octreeRefs = nullptr;
+  // Each structure's flat layout (kernels/types.h): header, nodes and
+  // references, as gridHeader, gridNodes (the cell offsets), gridRefs, ...
+#define CR_SIMD_ACCEL_ARRAYS_(N, U, l, H, Nd) \
+  const H* l##Header = nullptr;               \
+  const Nd* l##Nodes = nullptr;               \
+  const std::uint32_t* l##Refs = nullptr;
+  CR_ACCEL_TYPES(CR_SIMD_ACCEL_ARRAYS_)
+#undef CR_SIMD_ACCEL_ARRAYS_
   // N-wide BVH (single-ray path) of the ISA's width, and its K-wide leaf packs.
   const void* wideNodes = nullptr;  // WideNode<N>
   const WideLeaf* wideLeaves = nullptr;
@@ -130,21 +130,31 @@ struct KernelProbes {
                       ProbeResult* out) = nullptr;
 };
 
+// How the tracer forms packets for a structure's packet kernels from an
+// incoherent ray set: in input order, or grouped by direction class
+// (simd/ray_order.h DirectionClassOrder) always or where the tracer's
+// measure says it pays (simd_tracer.cpp GridClassOrderPays).
+enum class PacketOrder { Input, DirectionClasses, DirectionClassesWhenPays };
+
 // Each ISA's kernels: Probes() also tells its widths (SSE4: N = 4, K = 4;
 // AVX2: N = 8, K = 4), from which the tracer builds the matching wide BVH.
-// SelectPacketKernel and SelectSingleKernel are the BVH's; SelectGridKernel
-// and SelectOctreeKernel give either variant (key.packet). nullptr when the
-// scene has no primitives.
+// Select<Name>Kernel for each structure of CR_ACCEL_TYPES gives either
+// variant (key.packet; the BVH's from SelectPacketKernel and
+// SelectSingleKernel, which walk different layouts), nullptr when the scene
+// has no primitives; <Name>PacketOrder its packets' order.
+#define CR_DECLARE_SIMD_SELECT_(N, U, l, H, Nd) \
+  KernelFn Select##N##Kernel(const KernelKey& key); \
+  PacketOrder N##PacketOrder();
 #define CR_DECLARE_SIMD_ISA(ns)                      \
   namespace ns {                                     \
+  CR_ACCEL_TYPES(CR_DECLARE_SIMD_SELECT_)            \
   KernelFn SelectPacketKernel(const KernelKey& key); \
   KernelFn SelectSingleKernel(const KernelKey& key); \
-  KernelFn SelectGridKernel(const KernelKey& key);   \
-  KernelFn SelectOctreeKernel(const KernelKey& key); \
   KernelProbes Probes();                             \
   }
 CR_DECLARE_SIMD_ISA(sse4)
 CR_DECLARE_SIMD_ISA(avx2)
+#undef CR_DECLARE_SIMD_SELECT_
 #undef CR_DECLARE_SIMD_ISA
 
 }  // namespace cr::simd

@@ -1,12 +1,11 @@
-// The `simd` backend: BVH, grid and octree traversals with explicit SSE4.1 /
+// The `simd` backend: the structures' traversals with explicit SSE4.1 /
 // AVX2 kernels, chosen at run time (simd/isa.h), parallel over rays with
 // oneTBB.
 //
 // Variants: `packet` (N coherent rays walk the structure together:
-// simd/bvh_packet.h, grid_packet.h, octree_packet.h), `single` (one ray at a
-// time with SIMD inside its work: the N-wide BVH of simd/bvh_single.h, the
-// grid and octree walks of grid_single.h and octree_single.h with primitives
-// tested 4 at a time), `auto` (packets when the ray set looks coherent,
+// simd/<structure>_packet.h), `single` (one ray at a time with SIMD inside
+// its work: the N-wide BVH of simd/bvh_single.h, the cell walks of
+// simd/<structure>_single.h with primitives tested 4 at a time), `auto` (packets when the ray set looks coherent,
 // simd/ray_coherence.h, else whichever a short pilot finds faster; see
 // docs/SIMD.md for the measurements behind it).
 // What this backend does not implement is delegated to the scalar backend
@@ -60,45 +59,34 @@ constexpr double kAutoPacketFraction = 0.5;
 constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
 
 struct IsaEntry {
-  KernelFn (*packet)(const KernelKey&);  // BVH
-  KernelFn (*single)(const KernelKey&);  // BVH
-  KernelFn (*grid)(const KernelKey&);    // both variants
-  KernelFn (*octree)(const KernelKey&);  // both variants
+  KernelFn (*select[CR_NUM_ACCEL_TYPES])(const KernelKey&);  // by KernelAccel
+  PacketOrder (*order[CR_NUM_ACCEL_TYPES])();
   KernelProbes (*probes)();
 
-  KernelFn Select(const KernelKey& key) const
-  {
-    switch (key.accel) {
-      case KernelAccel::Grid: return grid(key);
-      case KernelAccel::Octree: return octree(key);
-      case KernelAccel::BVH: break;
-    }
-    return key.packet ? packet(key) : single(key);
-  }
+  KernelFn Select(const KernelKey& key) const { return select[static_cast<int>(key.accel)](key); }
 };
 
 IsaEntry EntryOf(Isa isa)
 {
 #if defined(CELLRAY_SIMD_X86)
-  if (isa == Isa::Avx2)
-    return {&avx2::SelectPacketKernel, &avx2::SelectSingleKernel, &avx2::SelectGridKernel, &avx2::SelectOctreeKernel,
-            &avx2::Probes};
-  if (isa == Isa::Sse4)
-    return {&sse4::SelectPacketKernel, &sse4::SelectSingleKernel, &sse4::SelectGridKernel, &sse4::SelectOctreeKernel,
-            &sse4::Probes};
+#define CR_SIMD_ENTRY_SELECT_(N, U, l, H, Nd) &ns::Select##N##Kernel,
+#define CR_SIMD_ENTRY_ORDER_(N, U, l, H, Nd) &ns::N##PacketOrder,
+  if (isa == Isa::Avx2) {
+    namespace ns = avx2;
+    return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
+  }
+  if (isa == Isa::Sse4) {
+    namespace ns = sse4;
+    return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
+  }
+#undef CR_SIMD_ENTRY_ORDER_
+#undef CR_SIMD_ENTRY_SELECT_
 #endif
   throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
 }
 
-KernelAccel KernelAccelOf(AccelKind k)
-{
-  switch (k) {
-    case AccelKind::Grid: return KernelAccel::Grid;
-    case AccelKind::Octree: return KernelAccel::Octree;
-    case AccelKind::BVH: break;
-  }
-  return KernelAccel::BVH;
-}
+// The kernels' name for a structure (the same list, the same order).
+KernelAccel KernelAccelOf(AccelKind k) { return static_cast<KernelAccel>(k); }
 
 class SimdTracer final : public Tracer {
  public:
@@ -122,14 +110,12 @@ class SimdTracer final : public Tracer {
     info_.bytes += rows_->Bytes();
     info_.buildMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
-    sc_.nodes = data_.bvh.nodes.data();
-    sc_.refs = data_.bvh.refs.data();
-    sc_.grid = &data_.grid.header;
-    sc_.cellStart = data_.grid.cellStart.data();
-    sc_.gridRefs = data_.grid.refs.data();
-    sc_.octree = &data_.octree.header;
-    sc_.octreeNodes = data_.octree.nodes.data();
-    sc_.octreeRefs = data_.octree.refs.data();
+#define CR_SIMD_BIND_ACCEL_(N, U, l, H, Nd) \
+  sc_.l##Header = &data_.l.header;          \
+  sc_.l##Nodes = data_.l.Nodes().data();    \
+  sc_.l##Refs = data_.l.refs.data();
+    CR_ACCEL_TYPES(CR_SIMD_BIND_ACCEL_)
+#undef CR_SIMD_BIND_ACCEL_
     if (wide_) wide_->Bind(sc_);
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
@@ -142,6 +128,7 @@ class SimdTracer final : public Tracer {
     key.stats = cfg.stats;
     key.packet = true;
     packetFn_ = e.Select(key);
+    packetOrder_ = e.order[static_cast<int>(key.accel)]();
     key.packet = false;
     singleFn_ = e.Select(key);
   }
@@ -161,16 +148,17 @@ class SimdTracer final : public Tracer {
       // order: the positions still to trace (all rays when empty).
       std::vector<std::uint32_t> order;
       const bool mayPack = variant_ != Variant::Single;
-      const bool octree = config_.accel != AccelKind::BVH;
-      const bool coherent = (variant_ == Variant::Auto || (mayPack && octree)) &&
+      const bool classes = packetOrder_ != PacketOrder::Input;
+      const bool coherent = (variant_ == Variant::Auto || (mayPack && classes)) &&
                             SampleCoherence(rays, width_).Fraction() >= kAutoPacketFraction;
       // packetOrder: the positions to form packets from, in order (empty: the
-      // rays in input order). Octree packets of an incoherent set are formed
-      // per direction class (DirectionClassOrder says why), the pilot's
-      // included; grid packets too where it pays (GridClassOrderPays).
+      // rays in input order). The packets of an incoherent set are formed per
+      // direction class where the structure's kernels ask for it
+      // (PacketOrder; DirectionClassOrder says why), the pilot's included.
       std::vector<std::uint32_t> packetOrder;
       if (mayPack && !coherent &&
-          (config_.accel == AccelKind::Octree || (config_.accel == AccelKind::Grid && GridClassOrderPays(rays))))
+          (packetOrder_ == PacketOrder::DirectionClasses ||
+           (packetOrder_ == PacketOrder::DirectionClassesWhenPays && GridClassOrderPays(rays))))
         packetOrder = DirectionClassOrder(rays);
       if (variant_ == Variant::Packet)
         usedPacket_ = true;
@@ -226,6 +214,7 @@ class SimdTracer final : public Tracer {
   std::unique_ptr<WideBVHBase> wide_;
   KernelScene sc_;
   KernelFn packetFn_ = nullptr, singleFn_ = nullptr;
+  PacketOrder packetOrder_ = PacketOrder::Input;
   int width_ = 4;
   bool usedPacket_ = false;
   bool traced_ = false;

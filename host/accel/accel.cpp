@@ -26,9 +26,9 @@ AccelKind ParseAccelKind(const std::string& s)
 const char* AccelKindName(AccelKind k)
 {
   switch (k) {
-#define CR_ACCEL_NAME(e, name) \
-  case AccelKind::e: return name;
-    CR_ACCEL_KINDS(CR_ACCEL_NAME)
+#define CR_ACCEL_NAME(N, U, l, H, Nd) \
+  case AccelKind::N: return #l;
+    CR_ACCEL_TYPES(CR_ACCEL_NAME)
 #undef CR_ACCEL_NAME
   }
   return "?";
@@ -47,9 +47,10 @@ AccelData BuildAccel(const Scene& scene, AccelKind kind, const AccelParams& para
   data.kind = kind;
   auto t0 = std::chrono::steady_clock::now();
   switch (kind) {
-    case AccelKind::Grid: data.grid = BuildGrid(scene, params, data.info); break;
-    case AccelKind::Octree: data.octree = BuildOctree(scene, params, data.info); break;
-    case AccelKind::BVH: data.bvh = BuildBVH(scene, params, data.info); break;
+#define CR_ACCEL_BUILD(N, U, l, H, Nd) \
+  case AccelKind::N: data.l = Build##N(scene, params, data.info); break;
+    CR_ACCEL_TYPES(CR_ACCEL_BUILD)
+#undef CR_ACCEL_BUILD
   }
   data.info.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return data;

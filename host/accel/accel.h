@@ -1,6 +1,7 @@
 // Acceleration structures, built on the host into flat arrays that upload to a
-// device unchanged (layouts in kernels/types.h). One entry point builds any of
-// the three; grid, octree and BVH look alike from outside.
+// device unchanged (layouts in kernels/types.h). One entry point builds any
+// of them, and every structure looks alike from outside: a header record, a
+// node array and the references (<Name>Data: header, Nodes(), refs).
 #pragma once
 
 #include <cstdint>
@@ -14,28 +15,33 @@
 
 namespace cr {
 
-// The structures, one entry each (enum name, command-line name): the CLI,
-// the bench, the hard cases and the tests iterate kAccelKinds; nothing else
-// lists them.
-#define CR_ACCEL_KINDS(X) X(Grid, "grid") X(Octree, "octree") X(BVH, "bvh")
-
-#define CR_ACCEL_ENUM(e, name) e,
-enum class AccelKind { CR_ACCEL_KINDS(CR_ACCEL_ENUM) };
+// The structures are the list CR_ACCEL_TYPES of kernels/types.h (enum name,
+// upper and lower name, header and node layouts); the command-line name is
+// the lower name. The CLI, the bench, the hard cases and the tests iterate
+// kAccelKinds; nothing else lists them.
+#define CR_ACCEL_ENUM(N, U, l, H, Nd) N,
+enum class AccelKind { CR_ACCEL_TYPES(CR_ACCEL_ENUM) };
+#undef CR_ACCEL_ENUM
 inline constexpr AccelKind kAccelKinds[] = {
-#define CR_ACCEL_ENTRY(e, name) AccelKind::e,
-    CR_ACCEL_KINDS(CR_ACCEL_ENTRY)
+#define CR_ACCEL_ENTRY(N, U, l, H, Nd) AccelKind::N,
+    CR_ACCEL_TYPES(CR_ACCEL_ENTRY)
 #undef CR_ACCEL_ENTRY
 };
-#undef CR_ACCEL_ENUM
 AccelKind ParseAccelKind(const std::string& s);  // InputError on unknown names
 const char* AccelKindName(AccelKind k);
-std::string AccelKindNames();  // "grid, octree, bvh": for help texts and errors
+std::string AccelKindNames();  // the command-line names, comma-separated: for help texts and errors
 
+// The builders' parameters, one entry each: X(field, type, option, help);
+// the CLI offers each as an option (0: the builder's default).
+#define CR_ACCEL_PARAMS(X)                                                                     \
+  X(gridDensity, double, "--grid-density", "Grid cells per primitive (Woo/Klimaszewski lambda)") \
+  X(octreeLeaf, int, "--octree-leaf", "Max references per octree leaf")                        \
+  X(octreeDepth, int, "--octree-depth", "Max octree depth")                                    \
+  X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")
 struct AccelParams {
-  double gridDensity = 0.0;  // Woo/Klimaszewski lambda: cells per primitive (0: default)
-  int octreeLeaf = 0;        // max references per octree leaf (0: default)
-  int octreeDepth = 0;       // max octree depth (0: default)
-  int bvhLeaf = 0;           // max primitives per BVH leaf (0: default)
+#define CR_ACCEL_PARAM_FIELD(f, T, opt, help) T f = 0;
+  CR_ACCEL_PARAMS(CR_ACCEL_PARAM_FIELD)
+#undef CR_ACCEL_PARAM_FIELD
 };
 
 // Per-structure measures (Havran): nodes or cells, leaves, empty leaves,
@@ -55,24 +61,30 @@ struct GridData {
   GridHeader header{};
   std::vector<std::uint32_t> cellStart;  // nCells + 1
   std::vector<std::uint32_t> refs;
+  const std::vector<std::uint32_t>& Nodes() const { return cellStart; }
 };
 
 struct OctreeData {
   OctreeHeader header{};
   std::vector<OctreeNode> nodes;
   std::vector<std::uint32_t> refs;
+  const std::vector<OctreeNode>& Nodes() const { return nodes; }
 };
 
 struct BVHData {
+  BVHHeader header{};
   std::vector<BVHNode> nodes;
   std::vector<std::uint32_t> refs;
+  const std::vector<BVHNode>& Nodes() const { return nodes; }
 };
 
+// The built structure: the member of its kind (grid, octree, bvh: the lower
+// names of CR_ACCEL_TYPES) holds it; the others stay empty.
 struct AccelData {
   AccelKind kind = AccelKind::BVH;
-  GridData grid;
-  OctreeData octree;
-  BVHData bvh;
+#define CR_ACCEL_DATA_MEMBER(N, U, l, H, Nd) N##Data l;
+  CR_ACCEL_TYPES(CR_ACCEL_DATA_MEMBER)
+#undef CR_ACCEL_DATA_MEMBER
   AccelInfo info;
 };
 

@@ -209,6 +209,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     empty.count = 0;
     empty.first = 0;
     out.nodes.push_back(empty);
+    out.header.nNodes = 1;
     info.params = fmt::format("leaf={} bins={}", bld.maxLeaf, kBins);
     info.nodes = 1;
     info.bytes = sizeof(BVHNode);
@@ -219,6 +220,8 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   out.nodes.resize(1);
   Flatten(*root, 0, out.nodes, info);
   out.refs = std::move(bld.order);
+  out.header.nNodes = static_cast<std::uint32_t>(out.nodes.size());
+  out.header.nRefs = static_cast<std::uint32_t>(out.refs.size());
   info.nodes = out.nodes.size();
   info.refs = out.refs.size();
   info.emptyLeaves = 0;

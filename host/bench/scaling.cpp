@@ -20,9 +20,8 @@ std::vector<SceneRef> ScalingScenes(bool quick)
 
 std::vector<Combo> ScalingCombos()
 {
-  std::vector<Combo> c = {Combo{Backend::Simd, AccelKind::Grid, Precision::Robust, ""},
-                          Combo{Backend::Simd, AccelKind::Octree, Precision::Robust, ""},
-                          Combo{Backend::Simd, AccelKind::BVH, Precision::Robust, ""}};
+  std::vector<Combo> c;
+  for (AccelKind k : kAccelKinds) c.push_back(Combo{Backend::Simd, k, Precision::Robust, ""});
   if (EmbreeAvailable()) c.push_back(Combo{Backend::Embree, AccelKind::BVH, Precision::Robust, "packet8"});
   return c;
 }

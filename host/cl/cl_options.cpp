@@ -67,9 +67,8 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     scene.ForEachType([&](const auto& pieces, std::uint32_t k) { s.types |= pieces.empty() ? 0u : 1u << k; });
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
-  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was
-  // 10-35% slower for the octree and the BVH and the same for the grid, 4x2
-  // within noise of 4x4 (docs/OPENCL.md). Elsewhere 8x8, an AMD wavefront or
+  // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was up to
+  // 35% slower, 4x2 within noise of 4x4 (docs/OPENCL.md, by structure). Elsewhere 8x8, an AMD wavefront or
   // two NVIDIA warps, not measured. Smaller where the device limits
   // work-groups.
   if (tileW > 0) {
@@ -102,9 +101,10 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
     CR_PRIM_TYPES(CR_HAS_OPTION_)
 #undef CR_HAS_OPTION_
     switch (s.accel) {
-      case AccelKind::BVH: o += " -DCR_ACCEL_BVH"; break;
-      case AccelKind::Grid: o += " -DCR_ACCEL_GRID"; break;
-      case AccelKind::Octree: o += " -DCR_ACCEL_OCTREE"; break;
+#define CR_ACCEL_OPTION_(N, U, l, H, Nd) \
+  case AccelKind::N: o += " -DCR_ACCEL_ONE -DCR_ACCEL_" #U; break;
+      CR_ACCEL_TYPES(CR_ACCEL_OPTION_)
+#undef CR_ACCEL_OPTION_
     }
     o += fmt::format(" -DCR_ANYHIT={} -DCR_UNIFIED={}", int(s.anyHit), int(s.unified));
     o += s.variant == ClVariant::Packet ? " -DCR_VARIANT_PACKET" : " -DCR_VARIANT_RAY";

@@ -26,15 +26,8 @@ namespace {
 // at 2k + 1, then the primitive ids and the structures.
 enum SceneArg : cl_uint {
   kArgPrimIds = 2 * CR_NUM_PRIM_TYPES,
-  kArgBvhNodes,
-  kArgBvhRefs,
-  kArgGrid,
-  kArgCellStart,
-  kArgGridRefs,
-  kArgOctree,
-  kArgOctNodes,
-  kArgOctRefs,
-  kArgAccel,
+  kArgAccelArrays,  // structure s: header, nodes, references at kArgAccelArrays + 3 s
+  kArgAccel = kArgAccelArrays + 3 * CR_NUM_ACCEL_TYPES,
   kArgAnyHit,
   kArgUnified,
   kNumSceneArgs
@@ -53,15 +46,8 @@ enum PrimaryArg : cl_uint {
   kArgPrimaryStats
 };
 
-int AccelArg(AccelKind k)
-{
-  switch (k) {
-    case AccelKind::Grid: return 0;
-    case AccelKind::Octree: return 1;
-    case AccelKind::BVH: return 2;
-  }
-  return 2;
-}
+// The `accel` argument: the structure's position in CR_ACCEL_TYPES.
+int AccelArg(AccelKind k) { return static_cast<int>(k); }
 
 template <typename T>
 void SetArg(cl::Kernel& k, cl_uint index, const T& value, const char* kernelName)
@@ -288,14 +274,7 @@ class ClTracer final : public Tracer {
       SetArg(k, 2 * t + 1, cl_uint(Prim_Count(&r, t)), name);
     }
     SetArg(k, kArgPrimIds, primIds_, name);
-    SetArg(k, kArgBvhNodes, bvhNodes_, name);
-    SetArg(k, kArgBvhRefs, bvhRefs_, name);
-    SetArg(k, kArgGrid, gridHeader_, name);
-    SetArg(k, kArgCellStart, cellStart_, name);
-    SetArg(k, kArgGridRefs, gridRefs_, name);
-    SetArg(k, kArgOctree, octHeader_, name);
-    SetArg(k, kArgOctNodes, octNodes_, name);
-    SetArg(k, kArgOctRefs, octRefs_, name);
+    for (cl_uint a = 0; a < 3 * CR_NUM_ACCEL_TYPES; ++a) SetArg(k, kArgAccelArrays + a, accel_[a], name);
     SetArg(k, kArgAccel, cl_int(AccelArg(config_.accel)), name);
     SetArg(k, kArgUnified, cl_int(config_.unifiedHits ? 1 : 0), name);
   }
@@ -333,24 +312,21 @@ class ClTracer final : public Tracer {
       prims_[t] = ClUpload(cl_, PrimTypeName(t), pieces.data(), pieces.size() * sizeof(pieces[0]));
     });
     primIds_ = ClUpload(cl_, "primitive ids", ids.data(), ids.size() * sizeof(std::uint32_t));
-    bvhNodes_ = bvhRefs_ = gridHeader_ = cellStart_ = gridRefs_ = octHeader_ = octNodes_ = octRefs_ = dummy_;
+    for (auto& b : accel_) b = dummy_;
+    // The built structure's header, nodes and references (the others keep
+    // the placeholder).
+    auto upload = [&](std::size_t s, const char* lower, const auto& data) {
+      const auto& nodes = data.Nodes();
+      accel_[3 * s] = ClUpload(cl_, fmt::format("{} header", lower).c_str(), &data.header, sizeof(data.header));
+      accel_[3 * s + 1] = ClUpload(cl_, fmt::format("{} nodes", lower).c_str(), nodes.data(), nodes.size() * sizeof(nodes[0]));
+      accel_[3 * s + 2] =
+          ClUpload(cl_, fmt::format("{} references", lower).c_str(), data.refs.data(), data.refs.size() * sizeof(std::uint32_t));
+    };
     switch (d.kind) {
-      case AccelKind::BVH:
-        bvhNodes_ = ClUpload(cl_, "bvh nodes", d.bvh.nodes.data(), d.bvh.nodes.size() * sizeof(BVHNode));
-        bvhRefs_ = ClUpload(cl_, "bvh references", d.bvh.refs.data(), d.bvh.refs.size() * sizeof(std::uint32_t));
-        break;
-      case AccelKind::Grid:
-        gridHeader_ = ClUpload(cl_, "grid header", &d.grid.header, sizeof(GridHeader));
-        cellStart_ = ClUpload(cl_, "grid cell offsets", d.grid.cellStart.data(),
-                              d.grid.cellStart.size() * sizeof(std::uint32_t));
-        gridRefs_ = ClUpload(cl_, "grid references", d.grid.refs.data(), d.grid.refs.size() * sizeof(std::uint32_t));
-        break;
-      case AccelKind::Octree:
-        octHeader_ = ClUpload(cl_, "octree header", &d.octree.header, sizeof(OctreeHeader));
-        octNodes_ = ClUpload(cl_, "octree nodes", d.octree.nodes.data(), d.octree.nodes.size() * sizeof(OctreeNode));
-        octRefs_ = ClUpload(cl_, "octree references", d.octree.refs.data(),
-                            d.octree.refs.size() * sizeof(std::uint32_t));
-        break;
+#define CR_CL_UPLOAD_ACCEL(N, U, l, H, Nd) \
+  case AccelKind::N: upload(CR_ACCEL_ID_##U, #l, d.l); break;
+      CR_ACCEL_TYPES(CR_CL_UPLOAD_ACCEL)
+#undef CR_CL_UPLOAD_ACCEL
     }
   }
 
@@ -396,7 +372,7 @@ class ClTracer final : public Tracer {
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
   cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_;
-  cl::Buffer bvhNodes_, bvhRefs_, gridHeader_, cellStart_, gridRefs_, octHeader_, octNodes_, octRefs_;
+  cl::Buffer accel_[3 * CR_NUM_ACCEL_TYPES];  // per structure: header, nodes, references
   cl::Buffer rayBuf_, hitBuf_, statsBuf_;
   std::size_t rayCapacity_ = 0, hitCapacity_ = 0;
 };

@@ -128,7 +128,7 @@ Run RegisterBench(CLI::App& app)
   cmd->add_option("scenes", o->scenes,
                   "Scene files or names: SPD (balls ...), meshes (../shared/scenes/meshes/NAME.obj), "
                   "gen:sphereflake|bumpy|stadium:N (default: the 7 SPD scenes and the meshes)");
-  cmd->add_option("--accel", o->accels, "Structures, comma-separated: grid,octree,bvh")->delimiter(',');
+  cmd->add_option("--accel", o->accels, "Structures, comma-separated: " + AccelKindNames())->delimiter(',');
   cmd->add_option("--backend", o->backends, "Backends, comma-separated: reference,scalar,simd,opencl,embree")->delimiter(',');
   cmd->add_option("--kinds", o->kinds, "Ray kinds, comma-separated: primary,shadow,diffuse,random")->delimiter(',');
   cmd->add_option("--precision", o->precisions, "Precision modes, comma-separated: fast,robust,fp64")->delimiter(',');

@@ -16,10 +16,10 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
       ->capture_default_str();
   cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
   cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--grid-density", o.gridDensity, "Grid cells per primitive (0: default)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--octree-leaf", o.octreeLeaf, "Max references per octree leaf (0: default)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--octree-depth", o.octreeDepth, "Max octree depth (0: default)")->check(CLI::NonNegativeNumber);
-  cmd->add_option("--bvh-leaf", o.bvhLeaf, "Max primitives per BVH leaf (0: default)")->check(CLI::NonNegativeNumber);
+#define CR_CLI_ACCEL_PARAM(f, T, opt, help) \
+  cmd->add_option(opt, o.params.f, std::string(help) + " (0: default)")->check(CLI::NonNegativeNumber);
+  CR_ACCEL_PARAMS(CR_CLI_ACCEL_PARAM)
+#undef CR_CLI_ACCEL_PARAM
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");
   cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU)");
   cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; opencl: ray or packet; embree: single or packet8 (-robust: RTC_SCENE_FLAG_ROBUST); default: the backend's choice");
@@ -33,10 +33,7 @@ TraceConfig TracerOptions::ToConfig() const
   c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
   c.precision = ParsePrecision(precision);
   c.threads = threads;
-  c.params.gridDensity = gridDensity;
-  c.params.octreeLeaf = octreeLeaf;
-  c.params.octreeDepth = octreeDepth;
-  c.params.bvhLeaf = bvhLeaf;
+  c.params = params;
   c.isa = isa;
   c.device = device;
   c.variant = variant;

@@ -27,7 +27,7 @@ Run RegisterHard(CLI::App& app)
   auto* cmd = app.add_subcommand("hard", "Run the numerically hard cases on every structure x backend x precision");
   cmd->add_flag("--quick", o->quick, "Reduced ray counts (the CI size)");
   cmd->add_option("--backend", o->backends, "Backends (default: scalar, simd, opencl where available)");
-  cmd->add_option("--accel", o->accels, "Structures (default: grid, octree, bvh)");
+  cmd->add_option("--accel", o->accels, "Structures (default: " + AccelKindNames() + ")");
   cmd->add_option("--precision", o->precisions, "Precision modes (default: fast, robust, fp64)");
   cmd->add_option("--case", o->cases, "Case names or prefixes (default: all), e.g. leaks/");
   cmd->add_option("-o,--output", o->out, "Write the Markdown report here (default: stdout)");

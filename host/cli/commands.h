@@ -19,8 +19,7 @@ struct TracerOptions {
   std::string backend = "auto";
   std::string precision = "robust";
   int threads = 0;
-  double gridDensity = 0.0;
-  int octreeLeaf = 0, octreeDepth = 0, bvhLeaf = 0;
+  AccelParams params;  // the builders' (CR_ACCEL_PARAMS)
   std::string isa, device, variant;
   TraceConfig ToConfig() const;  // validates names (InputError)
 };

@@ -14,7 +14,9 @@
 
 int main(int argc, char** argv)
 {
-  CLI::App app{"cellray: grid, octree and BVH ray tracing on CPU SIMD and OpenCL, checked against an fp64 reference"};
+  const std::string about =
+      "cellray: ray tracing with " + cr::AccelKindNames() + " on CPU SIMD and OpenCL, checked against an fp64 reference";
+  CLI::App app{about};
   app.require_subcommand(1);
   app.set_version_flag("--version", "cellray 0.1.0");
   std::map<CLI::App*, cr::cli::Run> runs;

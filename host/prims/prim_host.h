@@ -41,7 +41,7 @@ struct LocalSurface {
 //  PrimTypeName   its name in messages and JSON ("sphere");
 //  FloatBounds    its float box, rounded outward (builders, Embree boxes);
 //  OverlapsBox    does its surface meet the box? exact or conservative, in
-//                 double (grid and octree insertion, prim_overlap.h);
+//                 double (insertion into cells and octants);
 //  Scale          largest magnitude of its defining points (radii added):
 //                 the scale of a float intersector's rounding on it;
 //  SurfaceAt      the hit point near pApprox (with the hit's u, v) on its
@@ -76,7 +76,7 @@ CR_PRIM_TYPES(CR_PRIM_HOST_DECLS_)
 // Name of type k (CR_PRIM_*).
 const char* PrimTypeName(std::uint32_t k);
 
-// Unified piece g against the box (grid and octree insertion); the caller
+// Unified piece g against the box (insertion into cells); the caller
 // has already checked that the box meets g's bounding box. Builders make the
 // test conservative by passing a slightly enlarged box (grid_builder.cpp).
 inline bool PrimOverlapsBox(const Scene& scene, std::uint32_t g, const glm::dvec3& lo, const glm::dvec3& hi)

@@ -139,8 +139,8 @@ glm::vec3 F(const glm::dvec3& v) { return glm::vec3(v); }
 // A geometry statement as its type's ParseNff reads it.
 class LexerStatement final : public NffStatement {
  public:
-  LexerStatement(Lexer& lx, std::string_view kw, long line, std::uint32_t material)
-      : NffStatement(kw, lx.Name(), line, material), lx_(lx), stmt_(kw)
+  LexerStatement(Lexer& lx, std::string_view kw, long stmtLine, std::uint32_t stmtMaterial)
+      : NffStatement(kw, lx.Name(), stmtLine, stmtMaterial), lx_(lx), stmt_(kw)
   {
   }
   double Number(const char* what) override { return lx_.Number(stmt_.c_str(), line, what); }
