@@ -99,7 +99,7 @@ CR_FUNC PrimView Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_PARAM_) int unused)
   uint n = 0u;
   (void)unused;
   CR_PRIM_TYPES(CR_PRIM_VIEW_SET_)
-  pv.ranges.begin[CR_NUM_PRIM_TYPES] = n;
+  for (uint k = CR_NUM_PRIM_TYPES; k < CR_PRIM_RANGE_SLOTS; ++k) pv.ranges.begin[k] = n; /* the end, and padding */
   return pv;
 }
 

@@ -3,8 +3,7 @@
  * size and offsets, so host and device cannot drift apart.
  *
  * Unified primitive index g: the device stores one array per primitive type and
- * numbers them back to back in type order (CR_PRIM_SPHERE, CR_PRIM_TRIANGLE,
- * CR_PRIM_CONE): type k holds [begin[k], begin[k + 1]) of PrimRanges, and
+ * numbers them back to back in type order (CR_PRIM_TYPES): type k holds [begin[k], begin[k + 1]) of PrimRanges, and
  * nothing else computes these offsets (Prim_Is, Prim_Local). References
  * in leaves and cells are such indices, sorted ascending inside each leaf or
  * cell, so they come grouped by type. primIds[g] is the scene-file primitive
@@ -95,10 +94,11 @@ typedef struct {
 #define CR_IF(U, ...) CR_CAT(CR_IF_, CR_HAS_##U)(__VA_ARGS__)
 
 /* Where each type's unified indices begin: type k holds [begin[k],
- * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives.
- * 16 bytes. */
+ * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives;
+ * padded to a multiple of 16 bytes (32 for 4 to 7 types). */
+#define CR_PRIM_RANGE_SLOTS ((CR_NUM_PRIM_TYPES + 4u) & ~3u)
 typedef struct {
-  uint begin[CR_NUM_PRIM_TYPES + 1u];
+  uint begin[CR_PRIM_RANGE_SLOTS];
 } PrimRanges;
 
 /* Whether g is of type k, and its index in that type's array. */
