@@ -29,4 +29,31 @@ const std::vector<RayRecord>& BenchRays(const std::string& scene, RayKind kind);
 // points in the box [-r, r]^3: about half hit a primitive of size r there.
 std::vector<RayRecord> RaysAtOrigin(int n, float r, float dist, std::uint64_t seed);
 
+// The shapes of the intersector benchmarks (bench/micro_intersect.inc).
+inline constexpr int kRays = 1024;
+
+inline const Sphere kSphere{{0.0f, 0.0f, 0.0f}, 1.0f};
+inline const Triangle kTriangle{{-1.0f, -1.0f, 0.0f}, CR_TRI_REPORT_UV, {1.0f, -1.0f, 0.0f}, 0u, {0.0f, 1.0f, 0.0f}, 0u};
+inline const Cone kCone{{0.0f, 0.0f, -1.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 0.5f};
+inline const float kBoxLo[3] = {-1.0f, -1.0f, -1.0f}, kBoxHi[3] = {1.0f, 1.0f, 1.0f};
+
+enum class Shape { Sphere, Triangle, Cone, Box };
+
+
+// The middle ray and its exact distance: from (-5, 0, 0) along +x for the
+// cone (radius 0.75 at z = 0), from (0, 0, -5) along +z otherwise.
+inline RayRecord MiddleRay(Shape shape, double& tExpected)
+{
+  if (shape == Shape::Cone) {
+    tExpected = 4.25;
+    return RayRecord{{-5.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, INFINITY};
+  }
+  tExpected = shape == Shape::Triangle ? 5.0 : 4.0;
+  return RayRecord{{0.0f, 0.0f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+}
+
+// Hits of the fp64 mode on `rays` (micro_intersect_fp64.cpp): the count each
+// mode is validated against.
+int MicroFp64Hits(Shape shape, const std::vector<RayRecord>& rays);
+
 }  // namespace cr::micro

@@ -1,11 +1,20 @@
-/* Ray and hit state shared by every traversal. Uses the type `real` (float,
- * or double with CR_FP64), which the including program defines: trace.cl for
- * OpenCL, host/scalar/kernel_instance.inc for C++, where each translation
- * unit includes the kernel body once, inside its own namespace, per
- * precision mode. */
+/* Ray and hit state shared by every traversal, and the kernels' arithmetic
+ * type `real`: double in fp64 mode (CR_FP64), else float. Every kernel
+ * header includes what it uses and compiles on its own, as OpenCL C (at
+ * file scope) and as C++ (in the namespace of the including unit, which
+ * instantiates the kernels of one precision mode: host/scalar/
+ * kernel_instance.inc, one unit per mode; the SIMD units, robust; the
+ * Embree user geometry, robust). A unit holds one instance: the headers'
+ * guards are never undone. */
 #ifndef CELLRAY_KERNELS_RAY_H
 #define CELLRAY_KERNELS_RAY_H
 #include "types.h"
+
+#ifdef CR_FP64
+typedef double real;
+#else
+typedef float real;
+#endif
 
 /* A ray prepared for traversal: inverse direction for slab tests (1/+-0 is
  * +-inf on purpose) and the shear constants of the watertight triangle test

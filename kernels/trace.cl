@@ -29,12 +29,6 @@
 #error "build failure injected by CELLRAY_CL_FAULT=build"
 #endif
 
-#ifdef CR_FP64
-typedef double real;
-#else
-typedef float real;
-#endif
-
 #ifdef CR_CAMERA_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double camreal;

@@ -12,7 +12,6 @@
 #include "simd/vec.h"
 
 namespace cr::simd::CR_SIMD_NS {
-typedef float real;
 // The scalar kernel helpers, so that hits are kept and reported exactly as
 // the scalar backend does (only the ray and hit parts are used; the scalar
 // intersectors compile to nothing).

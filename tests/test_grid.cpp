@@ -21,7 +21,6 @@
 namespace cr {
 namespace test_grid {
 // Grid_Plane(), the planes the traversal walks.
-typedef float real;
 #include "kernels/grid.h"
 }  // namespace test_grid
 }  // namespace cr

@@ -18,7 +18,6 @@
 using namespace cr;
 
 namespace cr::octree_test_kernel {
-typedef float real;
 #include "kernels/octree.h"
 }  // namespace cr::octree_test_kernel
 

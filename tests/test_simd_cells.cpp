@@ -15,7 +15,6 @@
 
 namespace cr::test_simd_cells {
 // The planes the traversals walk.
-typedef float real;
 #include "kernels/grid.h"
 #include "kernels/octree.h"
 }  // namespace cr::test_simd_cells

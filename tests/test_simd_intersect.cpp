@@ -14,28 +14,11 @@
 #include <doctest/doctest.h>
 #include <fmt/format.h>
 
+#include "host/scalar/scalar_kernels.h"
 #include "host/scene/scene.h"
 #include "simd/probe_scene.h"
 #include "simd/isa.h"
 #include "simd/simd_kernels.h"
-
-// The scalar kernels as the oracle, robust and fast, each in its own namespace.
-namespace cr::simd_oracle_robust {
-typedef float real;
-#include "kernels/intersect.h"
-}  // namespace cr::simd_oracle_robust
-#undef CELLRAY_KERNELS_INTERSECT_H
-#undef CELLRAY_KERNELS_NUMERIC_H
-#undef CELLRAY_KERNELS_SPHERE_H
-#undef CELLRAY_KERNELS_TRIANGLE_H
-#undef CELLRAY_KERNELS_CONE_H
-#undef CELLRAY_KERNELS_RAY_H
-#define CR_FAST 1
-namespace cr::simd_oracle_fast {
-typedef float real;
-#include "kernels/intersect.h"
-}  // namespace cr::simd_oracle_fast
-#undef CR_FAST
 
 using namespace cr;
 using simd::KernelProbes;
@@ -79,52 +62,25 @@ struct TestScene : simd::ProbeScene {
   }
 };
 
-// Prim_Intersect of the scalar kernels from a fresh hit at the ray's tmax.
+// Prim_Intersect of the scalar kernels (the scalar backend's robust or fast
+// instance) from a fresh hit at the ray's tmax.
 ProbeResult ScalarPrim(const simd::ProbeScene& ps, const RayRecord& rec, std::uint32_t g, bool fast)
 {
+  KernelArgs a;
+#define CR_TEST_ARGS_ARRAY_(T, U, array) a.array = ps.scene.array.data();
+  CR_PRIM_TYPES(CR_TEST_ARGS_ARRAY_)
+#undef CR_TEST_ARGS_ARRAY_
+  a.ranges = ps.sc.ranges;
   ProbeResult out;
-  if (fast) {
-    namespace k = simd_oracle_fast;
-    k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
-                   ps.sc.ranges};
-    k::Ray ray;
-    k::Ray_Init(&ray, &rec);
-    k::Hit h;
-    k::Hit_Init(&h, &ray);
-    out.hit = k::Prim_Intersect(&pv, g, &ray, &h);
-    out.t = h.t;
-    out.u = h.u;
-    out.v = h.v;
-  } else {
-    namespace k = simd_oracle_robust;
-    k::PrimView pv{ps.scene.spheres.data(), ps.scene.triangles.data(), ps.scene.cones.data(),
-                   ps.sc.ranges};
-    k::Ray ray;
-    k::Ray_Init(&ray, &rec);
-    k::Hit h;
-    k::Hit_Init(&h, &ray);
-    out.hit = k::Prim_Intersect(&pv, g, &ray, &h);
-    out.t = h.t;
-    out.u = h.u;
-    out.v = h.v;
-  }
+  out.hit = fast ? k_fast::IntersectPiece(a, g, rec, &out.t, &out.u, &out.v)
+                 : k_robust::IntersectPiece(a, g, rec, &out.t, &out.u, &out.v);
   return out;
 }
 
 ProbeResult ScalarBox(const float lo[3], const float hi[3], const RayRecord& rec, bool fast)
 {
   ProbeResult out;
-  if (fast) {
-    namespace k = simd_oracle_fast;
-    k::Ray ray;
-    k::Ray_Init(&ray, &rec);
-    out.hit = k::Box_Intersect(lo, hi, &ray, ray.tmin, ray.tmax, &out.t);
-  } else {
-    namespace k = simd_oracle_robust;
-    k::Ray ray;
-    k::Ray_Init(&ray, &rec);
-    out.hit = k::Box_Intersect(lo, hi, &ray, ray.tmin, ray.tmax, &out.t);
-  }
+  out.hit = fast ? k_fast::IntersectBounds(lo, hi, rec, &out.t) : k_robust::IntersectBounds(lo, hi, rec, &out.t);
   return out;
 }
 

@@ -22,7 +22,6 @@ namespace cr {
 
 namespace grid_plane {
 // Grid_Plane() of the kernel, the one definition of the cell planes.
-typedef float real;
 #include "kernels/grid.h"
 }  // namespace grid_plane
 

@@ -30,7 +30,6 @@ namespace cr {
 // The kernel's Octree_Plane, compiled here so that the builder cuts cells at
 // exactly the planes the traversal uses.
 namespace octree_kernel {
-typedef float real;
 #include "kernels/octree.h"
 }  // namespace octree_kernel
 

@@ -15,7 +15,6 @@
 // Our float tests (kernels/, robust mode) for the user geometries: the same
 // arithmetic as the scalar backend's.
 namespace cr::embree_kernels {
-typedef float real;
 #include "kernels/intersect.h"
 }  // namespace cr::embree_kernels
 

@@ -1,6 +1,5 @@
 // The robust kernels as C++, with per-ray statistics. See kernel_instance.inc.
 #define CR_KERNEL_NS k_robust_stats
-#define CR_KERNEL_REAL float
 
 #define CR_STATS 1
 #include "host/scalar/kernel_instance.inc"

@@ -12,7 +12,6 @@ namespace cr::hard {
 
 namespace kern {
 // The planes exactly as the builders and traversals compute them.
-typedef float real;
 #include "kernels/grid.h"
 #include "kernels/octree.h"
 }  // namespace kern
