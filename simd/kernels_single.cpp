@@ -35,7 +35,7 @@ void ProbePacketPrimT(const KernelScene& sc, const RayRecord* rays, std::uint32_
   RayPacket<N> P;
   HitPacket<N> H;
   RayPacket_Init<N>(P, H, recs);
-  const vbool<N> changed = PacketPrim_Intersect<N, 7, kFast>(sc, g, P, H, vbool<N>(true));
+  const vbool<N> changed = PacketPrim_Intersect<N, kAllTypes, kFast>(sc, g, P, H, vbool<N>(true));
   const unsigned bits = changed.Bits();
   for (int l = 0; l < N; ++l) {
     out[l].hit = (bits >> l) & 1u;
