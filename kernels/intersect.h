@@ -31,6 +31,7 @@ typedef struct {
 #include "sphere.h"
 #include "triangle.h"
 #include "cone.h"
+#include "box.h"
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
  * robust mode: an exact float tie between two different spheres goes to the

@@ -70,6 +70,14 @@ typedef struct {
   float apexRadius;
 } Cone;
 
+/* Axis-aligned box (NFF extension `box`): its surface, 32 bytes. */
+typedef struct {
+  float lo[3];
+  uint pad0;
+  float hi[3];
+  uint pad1;
+} Box;
+
 /* The primitive types, one entry each, in unified-index order:
  * X(Type, UPPER, array): the layout `Type` (below), its index constant
  * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
@@ -77,11 +85,13 @@ typedef struct {
  * last, so that the primitives of existing scenes keep their g (ties go to
  * the lower g). The device code and its dispatch are generated from this
  * list (kernels/intersect.h, packet.cl). */
-#define CR_PRIM_TYPES(X) X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones)
+#define CR_PRIM_TYPES(X) \
+  X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
-#define CR_NUM_PRIM_TYPES 3u
+#define CR_PRIM_BOX 3u
+#define CR_NUM_PRIM_TYPES 4u
 /* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
@@ -192,6 +202,7 @@ static_assert(sizeof(HitRecord) == 16 && offsetof(HitRecord, prim) == 4 && offse
 static_assert(sizeof(Sphere) == 16);
 static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
 static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
+static_assert(sizeof(Box) == 32 && offsetof(Box, hi) == 16);
 static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);

@@ -23,3 +23,4 @@ struct SimdTest;
 #include "simd/sphere.h"
 #include "simd/triangle.h"
 #include "simd/cone.h"
+#include "simd/box.h"

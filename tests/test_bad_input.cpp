@@ -102,6 +102,8 @@ TEST_CASE("bad NFF input is rejected with FILE:LINE and exit 2")
   ExpectSceneError("inf.nff", "c 0 0 0 1 0 0 inf 1\n", ":1: 'c': an apex coordinate is not a finite number: 'inf'");
   ExpectSceneError("huge.nff", "s 0 0 0 1e39\n", ":1: 's': the radius '1e39' does not fit in a float");
   ExpectSceneError("unknown.nff", "s 0 0 0 1\nq 1 2 3\n", ":2: unknown statement 'q'");
+  ExpectSceneError("box.nff", "s 0 0 0 1\nbox 0 0 0 1 -1 1\n", ":2: 'box': ymin 0 is greater than ymax -1");
+  ExpectSceneError("boxshort.nff", "box 0 0 0 1 1\n", ":1: truncated 'box' statement");
   ExpectSceneError("negcount.nff", "p -3\n", ":1: 'p': negative vertex count -3");
   ExpectSceneError("hugecount.nff", "p 2000000000\n0 0 0\n", ":2: truncated 'p' statement (started on line 1)");
   ExpectSceneError("view.nff", "v\nfrom 0 0 0\nat 0 0 0\nup 0 0 1\nangle 45\nhither 0\nresolution 8 8\ns 0 0 0 1\n",

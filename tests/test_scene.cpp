@@ -250,3 +250,27 @@ TEST_CASE("OBJ: lines end and comments stop where tinyobjloader sees them (found
   CHECK(s.triangles[1].v2[2] == 5.0f);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("NFF box statement (extension): layout, ids among the other statements, unified order, bounds")
+{
+  const char* text =
+      "s 0 0 0 1\n"
+      "box -1 -2 -3 1 2 3\n"
+      "p 3\n0 0 5\n1 0 5\n0 1 5\n"
+      "box 2 2 2 2 3 4  # flat on x: a rectangle\n";
+  Scene s;
+  ParseNFF(text, "snippet", s);
+  REQUIRE(s.NumPrims() == 4);
+  CHECK((s.prims[1].kind == PrimKind::kShape && s.prims[1].type == CR_PRIM_BOX));
+  REQUIRE(s.boxes.size() == 2);
+  CHECK(s.boxes[0].lo[1] == -2.0f);
+  CHECK(s.boxes[0].hi[2] == 3.0f);
+  CHECK(s.boxes[1].lo[0] == s.boxes[1].hi[0]);
+  CHECK(s.pieceIds[CR_PRIM_BOX] == std::vector<std::uint32_t>{1, 3});
+  // Boxes come last in the unified order: sphere, triangle, then the boxes.
+  CHECK(s.UnifiedIds() == std::vector<std::uint32_t>{0, 2, 1, 3});
+  const Bounds b = s.UnifiedBounds(2);
+  CHECK(b.lo == glm::vec3(-1, -2, -3));
+  CHECK(b.hi == glm::vec3(1, 2, 3));
+  CHECK(s.CountKind(PrimKind::kShape, CR_PRIM_BOX) == 2);
+}

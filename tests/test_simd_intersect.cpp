@@ -58,6 +58,9 @@ struct TestScene : simd::ProbeScene {
     scene.cones.push_back(Cone{{0.0f, 0.0f, 0.0f}, 1.0f, {0.0f, 0.0f, 1.0f}, 0.0f});   // cone to a point
     scene.cones.push_back(Cone{{1.0f, 2.0f, 3.0f}, 0.5f, {2.0f, 1.0f, 5.0f}, 0.25f});  // oblique frustum
     scene.cones.push_back(Cone{{1.0f, 1.0f, 1.0f}, 0.5f, {1.0f, 1.0f, 1.0f}, 0.5f});   // H = 0
+    scene.boxes.push_back(Box{{-1.0f, -1.0f, -1.0f}, 0u, {1.0f, 1.0f, 1.0f}, 0u});      // the unit cube
+    scene.boxes.push_back(Box{{0.25f, -0.5f, 0.1f}, 0u, {0.75f, 0.5f, 0.1f}, 0u});      // flat on z
+    scene.boxes.push_back(Box{{1e4f, 2e4f, -3e4f}, 0u, {1.5e4f, 2.0001e4f, -2.9e4f}, 0u});  // far, thin
     Finish();
   }
 };
@@ -276,7 +279,8 @@ TEST_CASE("simd intersectors: seeded random rays around every primitive")
   };
   const Group groups[] = {{c.begin[CR_PRIM_SPHERE], c.begin[CR_PRIM_TRIANGLE], 0.0f, 0.0f, 0.0f, 1.2f},
                           {c.begin[CR_PRIM_TRIANGLE], c.begin[CR_PRIM_CONE], 0.5f, 0.5f, 0.3f, 0.8f},
-                          {c.begin[CR_PRIM_CONE], c.begin[CR_NUM_PRIM_TYPES], 0.5f, 0.5f, 1.5f, 2.0f}};
+                          {c.begin[CR_PRIM_CONE], c.begin[CR_PRIM_BOX], 0.5f, 0.5f, 1.5f, 2.0f},
+                          {c.begin[CR_PRIM_BOX], c.begin[CR_NUM_PRIM_TYPES], 0.0f, 0.0f, 0.0f, 1.5f}};
   unsigned seed = 1;
   for (const KernelProbes& pr : AvailableProbes()) {
     for (const Group& gr : groups) {

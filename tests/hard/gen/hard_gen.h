@@ -68,6 +68,8 @@ class SceneBuilder {
   // Six quads (polygon statements) bounding [lo, hi]: a backstop every ray
   // from inside ends on. Returns the first id.
   std::uint32_t Box(const glm::dvec3& lo, const glm::dvec3& hi);
+  // An axis-aligned box primitive (NFF extension `box`).
+  std::uint32_t AxisBox(const glm::dvec3& lo, const glm::dvec3& hi);
   std::uint32_t NextId() const { return scene_->NumPrims(); }
   Scene& Get() { return *scene_; }
   std::shared_ptr<const Scene> Finish() { return std::move(scene_); }

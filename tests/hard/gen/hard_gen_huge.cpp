@@ -34,7 +34,8 @@ constexpr double kPi = 3.14159265358979323846;
 // Target id of one ray from the reference: the primitive it hits, when the
 // hit is robust (|cos| of the angle to the normal >= minCos, and on
 // triangles every barycentric >= edgeFrac, on cones the axial position
-// inside the rim by edgeFrac of the height); else kAnyPrim.
+// inside the rim by edgeFrac of the height, on boxes the point inside its
+// face by edgeFrac of the face's extent); else kAnyPrim.
 std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec, double minCos, double edgeFrac)
 {
   const ref::DRay r = ref::MakeRay(rec);
@@ -47,11 +48,19 @@ std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec,
   if (c < minCos) return kAnyPrim;
   if (Prim_Is(&n, CR_PRIM_TRIANGLE, h.g)) {
     if (std::min({h.u, h.v, 1.0 - h.u - h.v}) < edgeFrac) return kAnyPrim;
-  } else if (h.g >= n.begin[CR_PRIM_CONE]) {
+  } else if (Prim_Is(&n, CR_PRIM_CONE, h.g)) {
     const Cone& cn = scene.cones[Prim_Local(&n, CR_PRIM_CONE, h.g)];
     const glm::dvec3 b = D(cn.base), w = D(cn.apex) - b;
     const double s = glm::dot(p - b, w) / glm::dot(w, w);
     if (s < edgeFrac || s > 1.0 - edgeFrac) return kAnyPrim;
+  } else if (Prim_Is(&n, CR_PRIM_BOX, h.g)) {
+    const Box& bx = scene.boxes[Prim_Local(&n, CR_PRIM_BOX, h.g)];
+    const glm::dvec3 lo = D(bx.lo), hi = D(bx.hi), nrm = tr.GeometricNormal(h.g, p);
+    for (int a = 0; a < 3; ++a) {
+      if (nrm[a] != 0.0) continue;  // the face's own axis
+      const double m = edgeFrac * (hi[a] - lo[a]);
+      if (p[a] < lo[a] + m || p[a] > hi[a] - m) return kAnyPrim;
+    }
   }
   return scene.IdOfUnified(h.g);
 }
@@ -258,6 +267,35 @@ HardCase Mixed(const GenOptions& o)
   return c;
 }
 
+// A box primitive 2e6 across whose top face (y = -1) is the ground, a small
+// box standing on it; cameras 10..100 above, rays down at every angle up to
+// 85 degrees from the vertical and at the small box. The slab parameters
+// (p - o) / d of the top face are exact or once rounded, so t stays within
+// an ulp or two however far the box's other faces are.
+HardCase GroundBox(const GenOptions& o)
+{
+  Rng rng(507);
+  SceneBuilder b;
+  b.AxisBox({-1e6, -1e6, -1e6}, {1e6, -1.0, 1e6});
+  b.AxisBox({2.0, -1.0, 3.0}, {2.5, -0.5, 3.5});
+  HardCase c = TargetCase("huge/ground-box", b);
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const glm::dvec3 cam = {rng.Uniform(-500.0, 500.0), -1.0 + std::exp(rng.Uniform(std::log(10.0), std::log(100.0))),
+                            rng.Uniform(-500.0, 500.0)};
+    glm::dvec3 dir;
+    if (k % 3 == 2) {
+      dir = glm::dvec3(rng.Uniform(2.0, 2.5), rng.Uniform(-1.0, -0.5), rng.Uniform(3.0, 3.5)) - cam;
+    } else {
+      const double theta = kPi * rng.Uniform(0.0, 85.0 / 180.0);
+      dir = AroundAxis({0.0, -1.0, 0.0}, theta, rng.Uniform(0.0, 2 * kPi));
+    }
+    c.rays.push_back(Rec(cam, dir));
+  }
+  SetTargets(c, 0.05, 1e-6);
+  return c;
+}
+
 // Small primitives seen from far away, the origins in or near their planes
 // (a random ray from a corner of a scene that holds a ground sphere): the
 // triangle is seen edge-on, every edge function lies below its rounding and
@@ -339,6 +377,11 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
                                "long of radius 1 to 2 seen from 20..100 away.") +
                        expect,
                    false, [](AccelKind, const GenOptions& o) { return HugeCones(o); }});
+  specs.push_back({"huge/ground-box", "huge",
+                   std::string("A box primitive 2e6 across as a ground (top face y = -1) with a 0.5-unit box on it; "
+                               "cameras 10..100 above, rays down at up to 85 degrees and at the small box.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return GroundBox(o); }});
   specs.push_back({"huge/far-origins", "huge",
                    "8 triangles 0.5..3 across, 4 spheres and a cone near the origin; ray origins 1e5..2e6 away in "
                    "the triangles' planes (a third of them off the plane by up to 1e-3 of the distance), directions "

@@ -218,6 +218,55 @@ HardCase LeakCase(const char* name, const Mesh& m, Inside inside, std::size_t co
   return c;
 }
 
+// A room [-1,1]^3 walled by six box primitives 0.25 thick that overlap at
+// its edges and corners. Rays from inside (origins on a 2^-8 lattice) aimed
+// exactly at the room's corners (40%), at points of its edges (40%) and of
+// its faces (20%): where two or three walls meet, a ray must hit one of
+// them at the room's surface.
+HardCase BoxRoom(const GenOptions& o)
+{
+  SceneBuilder b;
+  const double e = 1.25;
+  b.AxisBox({-e, -e, -e}, {e, -1.0, e});
+  b.AxisBox({-e, 1.0, -e}, {e, e, e});
+  b.AxisBox({-e, -1.0, -e}, {-1.0, 1.0, e});
+  b.AxisBox({1.0, -1.0, -e}, {e, 1.0, e});
+  b.AxisBox({-1.0, -1.0, -e}, {1.0, 1.0, -1.0});
+  b.AxisBox({-1.0, -1.0, 1.0}, {1.0, 1.0, e});
+  HardCase c;
+  c.name = "leaks/box-room";
+  c.scene = b.Finish();
+  c.expect = Expect::Closed;
+  // Beyond the room's surface a ray runs on through the walls' solid
+  // corners, so several boxes occlude it: the closest query is the test.
+  c.occlusion = false;
+  Rng rng(108);
+  auto lattice = [&](double lo, double hi) { return std::round(rng.Uniform(lo, hi) * 256.0) / 256.0; };
+  auto sign = [&]() { return rng.Uniform() < 0.5 ? -1.0 : 1.0; };
+  const std::size_t n = o.quick ? 20000 : 200000;
+  while (c.rays.size() < n) {
+    const glm::dvec3 org(lattice(-0.99, 0.99), lattice(-0.99, 0.99), lattice(-0.99, 0.99));
+    glm::dvec3 target;
+    const double kind = rng.Uniform();
+    const int a = int(rng.Below(3));
+    if (kind < 0.4) {
+      target = {sign(), sign(), sign()};
+    } else if (kind < 0.8) {
+      target[a] = lattice(-1.0, 1.0);
+      target[(a + 1) % 3] = sign();
+      target[(a + 2) % 3] = sign();
+    } else {
+      target[a] = sign();
+      target[(a + 1) % 3] = lattice(-1.0, 1.0);
+      target[(a + 2) % 3] = lattice(-1.0, 1.0);
+    }
+    const glm::dvec3 d = target - org;
+    if (d == glm::dvec3(0.0) || !ExactF(d)) continue;
+    c.rays.push_back(Rec(org, d));
+  }
+  return c;
+}
+
 }  // namespace
 
 void AddLeakCases(std::vector<CaseSpec>& specs)
@@ -238,6 +287,12 @@ void AddLeakCases(std::vector<CaseSpec>& specs)
                    false, [](AccelKind, const GenOptions& o) {
                      return LeakCase("leaks/split-cube", SplitCube(40), InCube, o.quick ? 20000 : 300000, 102);
                    }});
+  specs.push_back({"leaks/box-room", "leaks",
+                   "A room [-1,1]^3 walled by six box primitives 0.25 thick, overlapping at its edges and corners; "
+                   "rays from inside (origins on a 2^-8 lattice) exactly at its corners (40%), edge points (40%) "
+                   "and face points (20%). Expect (closest only: beyond the surface several walls occlude) as "
+                   "leaks/icosphere: a hit on a wall at the room's surface.",
+                   false, [](AccelKind, const GenOptions& o) { return BoxRoom(o); }});
   specs.push_back({"leaks/fan-cone", "leaks",
                    "A closed cone of 4096 triangles (quick: 2048): 2048 around the apex and 2048 around the base "
                    "centre (two vertices each shared by 2048 triangles; the sides are slivers of aspect ratio ~700); "

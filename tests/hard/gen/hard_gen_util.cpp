@@ -60,6 +60,14 @@ std::uint32_t SceneBuilder::Cone(const glm::dvec3& base, double baseRadius, cons
   return id;
 }
 
+std::uint32_t SceneBuilder::AxisBox(const glm::dvec3& lo, const glm::dvec3& hi)
+{
+  const std::uint32_t id = NextId();
+  NffValues st("box", scene_->path, id + 1, {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+  ReadGeometry(st, *scene_);
+  return id;
+}
+
 std::uint32_t SceneBuilder::Box(const glm::dvec3& lo, const glm::dvec3& hi)
 {
   const std::uint32_t first = NextId();
