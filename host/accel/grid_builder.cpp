@@ -126,8 +126,9 @@ void CellRange(const GridHeader& h, int axis, double lo, double hi, double eps, 
 }
 
 struct Builder {
-  explicit Builder(const Scene& s) : scene(s) {}
+  explicit Builder(const Scene& s) : scene(s), ranges(s.Ranges()) {}
   const Scene& scene;
+  const PrimRanges ranges;
   GridHeader header{};
   double eps = 0.0;
   std::vector<Bounds> boxes;
@@ -148,7 +149,7 @@ struct Builder {
         for (int x = first[0]; x <= last[0]; ++x) {
           lo.x = double(grid_plane::Grid_Plane(&header, 0, x)) - eps;
           hi.x = double(grid_plane::Grid_Plane(&header, 0, x + 1)) + eps;
-          if (PrimOverlapsBox(scene, g, lo, hi))
+          if (PrimOverlapsBox(scene, ranges, g, lo, hi))
             visit(std::uint32_t(x) + header.res[0] * (std::uint32_t(y) + header.res[1] * std::uint32_t(z)));
         }
       }

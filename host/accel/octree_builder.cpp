@@ -205,11 +205,12 @@ class Builder {
   // The exact-shape tests shared with the grid (OverlapsBox, host/prims/).
   bool Overlaps(std::uint32_t g, const DBox& cell) const
   {
-    return PrimOverlapsBox(scene_, g, glm::dvec3(cell.lo[0], cell.lo[1], cell.lo[2]),
+    return PrimOverlapsBox(scene_, ranges_, g, glm::dvec3(cell.lo[0], cell.lo[1], cell.lo[2]),
                            glm::dvec3(cell.hi[0], cell.hi[1], cell.hi[2]));
   }
 
   const Scene& scene_;
+  const PrimRanges ranges_ = scene_.Ranges();
   int maxLeaf_, maxDepth_;
   std::vector<DBox> boxes_;
 };

@@ -32,7 +32,7 @@ constexpr std::size_t kPacket = 8;
 class EmbreeTracer final : public Tracer {
  public:
   EmbreeTracer(const Scene& scene, const TraceConfig& cfg)
-      : scene_(scene), unified_(cfg.unifiedHits), primIds_(scene.UnifiedIds())
+      : scene_(scene), ranges_(scene.Ranges()), unified_(cfg.unifiedHits), primIds_(scene.UnifiedIds())
   {
     std::string v = cfg.variant;
     const std::string suffix = "-robust";
@@ -94,6 +94,7 @@ class EmbreeTracer final : public Tracer {
 
  private:
   const Scene& scene_;
+  PrimRanges ranges_{};
   bool unified_ = false;
   bool packet_ = false;
   bool robust_ = false;
@@ -137,9 +138,8 @@ class EmbreeTracer final : public Tracer {
   HitRecord RecordOfUnified(std::uint32_t g, float t, float u, float v, bool occlusion) const
   {
     HitRecord h{occlusion ? 0.0f : t, unified_ ? g : primIds_[g], 0.0f, 0.0f};
-    const std::uint32_t nS = static_cast<std::uint32_t>(scene_.spheres.size());
-    const std::uint32_t nT = static_cast<std::uint32_t>(scene_.triangles.size());
-    if (!occlusion && g >= nS && g < nS + nT && (unified_ || (scene_.triangles[g - nS].flags & CR_TRI_REPORT_UV))) {
+    if (!occlusion && Prim_Is(&ranges_, CR_PRIM_TRIANGLE, g) &&
+        (unified_ || (scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)].flags & CR_TRI_REPORT_UV))) {
       h.u = u;
       h.v = v;
     }

@@ -26,6 +26,26 @@ void DiscBox(const Cone& c, glm::dvec3& lo, glm::dvec3& hi)
   hi = glm::max(p0 + e * double(c.baseRadius), p1 + e * double(c.apexRadius));
 }
 
+// Point p against the cone's axis, in double: the unit axis w, the height
+// H, p's axial position s from the base and its offset from the axis.
+struct AxisPoint {
+  glm::dvec3 w;
+  double H, s;
+  glm::dvec3 radial;
+};
+AxisPoint AxisPointOf(const Cone& cn, const glm::dvec3& p)
+{
+  AxisPoint a;
+  const glm::dvec3 b = D3(cn.base);
+  a.w = D3(cn.apex) - b;
+  a.H = glm::length(a.w);
+  a.w /= a.H;
+  const glm::dvec3 q = p - b;
+  a.s = glm::dot(q, a.w);
+  a.radial = q - a.s * a.w;
+  return a;
+}
+
 }  // namespace
 
 const char* PrimTypeName(PrimTag<Cone>) { return "cone"; }
@@ -146,14 +166,9 @@ int RefRoots(const ref::DRay& r, const Cone& cn, double t[2], double*, double*)
 // (0, r0)-(H, r1).
 double RefDistance(const Cone& cn, const glm::dvec3& p)
 {
-  const glm::dvec3 b = D3(cn.base);
-  glm::dvec3 w = D3(cn.apex) - b;
-  const double H = glm::length(w);
-  w /= H;
-  const glm::dvec3 q = p - b;
-  const double s = glm::dot(q, w);
-  const double rho = glm::length(q - s * w);
-  const glm::dvec2 P(s, rho), S0(0.0, cn.baseRadius), S1(H, cn.apexRadius);
+  const AxisPoint a = AxisPointOf(cn, p);
+  const double rho = glm::length(a.radial);
+  const glm::dvec2 P(a.s, rho), S0(0.0, cn.baseRadius), S1(a.H, cn.apexRadius);
   const glm::dvec2 e = S1 - S0;
   const double u = std::clamp(glm::dot(P - S0, e) / glm::dot(e, e), 0.0, 1.0);
   return glm::length(P - (S0 + u * e));
@@ -161,19 +176,12 @@ double RefDistance(const Cone& cn, const glm::dvec3& p)
 
 glm::dvec3 RefNormal(const Cone& cn, const glm::dvec3& p)
 {
-  const glm::dvec3 b = D3(cn.base);
-  glm::dvec3 w = D3(cn.apex) - b;
-  const double H = glm::length(w);
-  w /= H;
-  const glm::dvec3 q = p - b;
-  const double s = glm::dot(q, w);
-  glm::dvec3 radial = q - s * w;
-  const double rl = glm::length(radial);
-  if (rl == 0.0) return w;
-  radial /= rl;
+  const AxisPoint a = AxisPointOf(cn, p);
+  const double rl = glm::length(a.radial);
+  if (rl == 0.0) return a.w;
   // The surface line rises by (r1 - r0) over H: the normal tilts back along -w.
-  const double k = (double(cn.apexRadius) - double(cn.baseRadius)) / H;
-  return glm::normalize(radial - k * w);
+  const double k = (double(cn.apexRadius) - double(cn.baseRadius)) / a.H;
+  return glm::normalize(a.radial / rl - k * a.w);
 }
 
 void RefBall(const Cone& c, glm::dvec3& mid, double& reach)

@@ -76,12 +76,14 @@ CR_PRIM_TYPES(CR_PRIM_HOST_DECLS_)
 // Name of type k (CR_PRIM_*).
 const char* PrimTypeName(std::uint32_t k);
 
-// Unified piece g against the box (insertion into cells); the caller
-// has already checked that the box meets g's bounding box. Builders make the
-// test conservative by passing a slightly enlarged box (grid_builder.cpp).
-inline bool PrimOverlapsBox(const Scene& scene, std::uint32_t g, const glm::dvec3& lo, const glm::dvec3& hi)
+// Unified piece g against the box (insertion into cells; r: the scene's
+// Ranges()); the caller has already checked that the box meets g's bounding
+// box. Builders make the test conservative by passing a slightly enlarged
+// box (grid_builder.cpp).
+inline bool PrimOverlapsBox(const Scene& scene, const PrimRanges& r, std::uint32_t g, const glm::dvec3& lo,
+                            const glm::dvec3& hi)
 {
-  return scene.Visit(g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, lo, hi); });
+  return scene.Visit(r, g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, lo, hi); });
 }
 
 // Largest component magnitude (shared by the types' Scale and SurfaceAt).

@@ -82,6 +82,7 @@ bool PossiblyMeets(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r,
 bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
 {
   const Scene& scene = tr.GetScene();
+  const PrimRanges ranges = scene.Ranges();
   const double dl = glm::length(r.d);
   auto delta = [&](double t) { return Delta(r, t); };
   std::vector<std::uint32_t> pieces;
@@ -91,14 +92,14 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
     // closest approaches (RefNearTimes, host/prims/) are sampled on it.
     glm::dvec3 mid;
     double reach = 0.0;
-    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefBall(piece, mid, reach); });
+    scene.Visit(ranges, g, [&](const auto& piece, std::uint32_t) { RefBall(piece, mid, reach); });
     const double tc = glm::dot(mid - r.o, r.d) / (dl * dl);
     const double slack = (reach + delta(tc + reach / dl) + 1e-300) / dl;
     const double t0 = std::max({0.0, r.tmin - delta(r.tmin) / dl, tc - slack});
     const double t1 = std::min(r.tmax + delta(r.tmax) / dl, tc + slack);
     if (!(t0 <= t1)) continue;
     std::vector<double> ts = {t0, t1};
-    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefNearTimes(piece, r, t0, t1, ts); });
+    scene.Visit(ranges, g, [&](const auto& piece, std::uint32_t) { RefNearTimes(piece, r, t0, t1, ts); });
     for (double t : ts)
       if (tr.DistanceToPrim(prim, r.o + t * r.d) <= delta(t)) return true;
   }

@@ -23,7 +23,7 @@ ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), ranges_(sc
   const std::uint32_t n = scene.NumUnified();
   std::vector<glm::dvec3> lo(n), hi(n);
   for (std::uint32_t g = 0; g < n; ++g)
-    scene.Visit(g, [&](const auto& piece, std::uint32_t) { RefBounds(piece, lo[g], hi[g]); });
+    scene.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { RefBounds(piece, lo[g], hi[g]); });
   order_.resize(n);
   std::iota(order_.begin(), order_.end(), 0u);
   nodes_.reserve(n ? 2 * n / kLeafSize + 2 : 1);
@@ -105,7 +105,7 @@ void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) con
 
 int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u, double* v) const
 {
-  return scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefRoots(ray, piece, t, u, v); });
+  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefRoots(ray, piece, t, u, v); });
 }
 
 RefHit ReferenceTracer::Intersect(const DRay& ray) const
@@ -170,7 +170,7 @@ double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) 
   PiecesOf(prim, pieces);
   double best = INFINITY;
   for (std::uint32_t g : pieces) {
-    const double d = scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefDistance(piece, p); });
+    const double d = scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefDistance(piece, p); });
     best = std::min(best, d);
   }
   return best;
@@ -181,13 +181,13 @@ double ReferenceTracer::PrimScale(std::uint32_t prim) const
   std::vector<std::uint32_t> pieces;
   PiecesOf(prim, pieces);
   double s = 0.0;
-  for (std::uint32_t g : pieces) s = std::max(s, scene_.Visit(g, [](const auto& piece, std::uint32_t) { return Scale(piece); }));
+  for (std::uint32_t g : pieces) s = std::max(s, scene_.Visit(ranges_, g, [](const auto& piece, std::uint32_t) { return Scale(piece); }));
   return s;
 }
 
 glm::dvec3 ReferenceTracer::GeometricNormal(std::uint32_t g, const glm::dvec3& p) const
 {
-  return scene_.Visit(g, [&](const auto& piece, std::uint32_t) { return RefNormal(piece, p); });
+  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefNormal(piece, p); });
 }
 
 glm::dvec3 ReferenceTracer::ShadingNormal(std::uint32_t g, const glm::dvec3& p, double u, double v) const

@@ -69,8 +69,10 @@ Bounds Scene::UnifiedBounds(std::uint32_t g) const
 Bounds Scene::WorldBounds() const
 {
   Bounds b;
-  const std::uint32_t n = NumUnified();
-  for (std::uint32_t g = 0; g < n; ++g) b.Extend(UnifiedBounds(g));
+  const PrimRanges r = Ranges();
+  const std::uint32_t n = r.begin[CR_NUM_PRIM_TYPES];
+  for (std::uint32_t g = 0; g < n; ++g)
+    b.Extend(Visit(r, g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); }));
   return b;
 }
 

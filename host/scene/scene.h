@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -119,11 +120,16 @@ struct Scene {
     pieceIds[TypeIndex(PrimTag<T>{})].push_back(id);
     return static_cast<std::uint32_t>(v.size() - 1);
   }
-  // f(piece, local) on unified piece g (its type's array, and its index there).
+  // f(piece, local) on unified piece g (its type's array, and its index
+  // there). Loops over many pieces pass the scene's Ranges() computed once.
   template <class F>
   decltype(auto) Visit(std::uint32_t g, F&& f) const
   {
-    const PrimRanges r = Ranges();
+    return Visit(Ranges(), g, std::forward<F>(f));
+  }
+  template <class F>
+  decltype(auto) Visit(const PrimRanges& r, std::uint32_t g, F&& f) const
+  {
 #define CR_SCENE_VISIT_(T, U, a) \
   if (g < Prim_End(&r, CR_PRIM_##U)) return f(a[Prim_Local(&r, CR_PRIM_##U, g)], Prim_Local(&r, CR_PRIM_##U, g));
     CR_PRIM_TYPES(CR_SCENE_VISIT_)
