@@ -12,8 +12,13 @@
 /* Sphere_NeedsDf's rule for a cone (Cone_Intersect), or o - base much longer than its radial part
  * oR (a long cone seen from beside its middle: oR carries the rounding of
  * o - base, relatively |dl| / |oR| ulps; always redone past 2^18). Then C's
- * error grows with |dl| too: about 22 ulps of |oR| |dl| + 8 of |k rb| |dl|,
- * which e bounds (2^-18 = 64 ulps) with cScale's share. Each root gets its
+ * error grows with |dl| too. To first order (u = 2^-24): oR's radial part
+ * within 4u |dl| + u |oR| (o - base, the axis's direction and the products
+ * each round by about u |dl|), os within 9u |dl|, k within 5u |k|, so C
+ * within 8u |oR| |dl| + 28u |k rb| |dl| + 6u cScale; e bounds it by 16u
+ * |oR| |dl| + 64u |k rb| |dl| + 16u cScale (a random search over long,
+ * thin, huge and tilted cones with origins on and near their surfaces found
+ * at most 0.6 of the first bound). Each root gets its
  * own window, rel of itself plus e / |q|, rel bounding q's and A's relative
  * errors (below; always redone past 1/16): a ray leaving the cone's surface
  * is redone only when its near root may lie in range, not because the far
@@ -21,29 +26,45 @@
  * divided by A: both windows then take the larger root's share, as for
  * Sphere_NeedsDf. */
 CR_FUNC int Cone_NeedsDf(real C, real cScale, real Bh, real disc, real ee, real xx, real q, real dl2, real oo, real k,
-                         real ds, real rb, real dRdR, real dd, real A, real t0, real t1, real tmin, real tmax)
+                         real ds, real rb, real dd, real A, real t0, real t1, real tmin, real tmax, real os,
+                         real H, int anyHit)
 {
   const real dScale = ee + xx;
   const real d2 = disc * (Bh * Bh + disc);
   if (!(cScale > 8.0f * fabs(C) || dScale * dScale > 64.0f * d2 || dl2 > 64.0f * oo)) return 0;
   if (dScale * dScale > 0x1.0p36f * d2 || dl2 > 0x1.0p36f * oo || !(disc > (real)0.0f)) return 1;
-  const real ndl = sqrt(dl2), ndR = sqrt(dRdR), nd = sqrt(dd), noR = sqrt(oo), kds = fabs(k * ds);
+  const real ndl = sqrt(dl2), nd = sqrt(dd), noR = sqrt(oo), kds = fabs(k * ds), ak = fabs(k), arb = fabs(rb);
   /* First-order bounds (u = 2^-24, generously): oR within 11u |dl|, dR
    * within 6u |d|, rb within 4u |k| |dl| + 2u |rb|; so e = rb dR - k ds oR
    * within Ee, x = oR x dR within Ex, disc = ee - xx within eDisc, Bh within
-   * eB, A within eA; q within eq, its root's share relative to |q|. */
-  const real Ee = 0x1.0p-20f * ((fabs(k) * ndl + fabs(rb)) * ndR + fabs(rb) * nd + kds * ndl);
-  const real Ex = 0x1.0p-19f * (ndl * ndR + noR * nd);
-  const real eDisc = 2.0f * (sqrt(ee) * Ee + sqrt(xx) * Ex) + 0x1.0p-21f * dScale;
-  const real eB = 0x1.0p-20f * (ndl * (ndR + fabs(k) * kds) + noR * nd + kds * fabs(rb));
-  const real eA = 0x1.0p-19f * (ndR * nd + kds * kds + fabs(k) * kds * nd);
-  const real eq = eDisc / (2.0f * sqrt(disc)) + eB;
-  const real rel = eq / fabs(q) + eA / fabs(A) + 0x1.0p-20f;
+   * eB, A within eA; q within eq, its root's share relative to |q|. Cheaply:
+   * |dR| <= |d|, and sqrt(ee), sqrt(xx) <= sqrt(ee + xx). */
+  const real Ee = 0x1.0p-20f * ((ak * ndl + 2.0f * arb) * nd + kds * ndl);
+  const real Ex = 0x1.0p-19f * ((ndl + noR) * nd);
+  const real eDisc = 2.0f * sqrt(dScale) * (Ee + Ex) + 0x1.0p-21f * dScale;
+  const real eB = 0x1.0p-20f * (ndl * (nd + ak * kds) + noR * nd + kds * arb);
+  const real eA = 0x1.0p-19f * (dd + kds * (kds + ak * nd));
+  const real iq = 1.0f / fabs(q);
+  const real rel = (eDisc / (2.0f * sqrt(disc)) + eB) * iq + eA / fabs(A) + 0x1.0p-20f;
   if (!(eDisc < 0.25f * disc && rel < 0.0625f)) return 1;
-  const real e = 0x1.0p-18f * (cScale + ndl * (noR + fabs(k * rb))) / fabs(q);
+  const real e = 0x1.0p-20f * (cScale + ndl * (noR + 4.0f * fabs(k * rb))) * iq;
   const real m = (real)16.0f * q * q >= A * cScale ? (real)0.0f : fmax(fabs(t0), fabs(t1));
   const real s0 = rel * fmax(fabs(t0), m) + e, s1 = rel * fmax(fabs(t1), m) + e;
-  return (t0 + s0 >= tmin && t0 - s0 <= tmax) || (t1 + s1 >= tmin && t1 - s1 <= tmax);
+  /* A root whose axial position is certainly outside [0, H] is a miss
+   * however far off t is (a ray leaving a branch near the joint crosses the
+   * neighbouring cone's infinite surface there, before its base). The float
+   * os + t ds is within 2^-20 (|dl| + |t| |d| + H) + |ds| s of the exact
+   * position at the exact root (os carries about 9u |dl|, ds 8u |d|, H 3u). */
+  const real a0 = os + t0 * ds, a1 = os + t1 * ds;
+  const real ea0 = 0x1.0p-20f * (ndl + fabs(t0) * nd + H) + fabs(ds) * s0;
+  const real ea1 = 0x1.0p-20f * (ndl + fabs(t1) * nd + H) + fabs(ds) * s1;
+  /* Any-hit: a root in range for certain, at an axial position inside
+   * [0, H] for certain, is a hit whatever its exact t (Sphere_NeedsDf). */
+  if (anyHit && ((t0 - s0 > tmin && t0 + s0 < tmax && a0 - ea0 > (real)0.0f && a0 + ea0 < H) ||
+                 (t1 - s1 > tmin && t1 + s1 < tmax && a1 - ea1 > (real)0.0f && a1 + ea1 < H)))
+    return 0;
+  return (t0 + s0 >= tmin && t0 - s0 <= tmax && a0 + ea0 >= (real)0.0f && a0 - ea0 <= H) ||
+         (t1 + s1 >= tmin && t1 - s1 <= tmax && a1 + ea1 >= (real)0.0f && a1 - ea1 <= H);
 }
 
 
@@ -160,8 +181,8 @@ CR_FUNC int Cone_Intersect(const Ray* r, const Cone* cn, real tmin, real tmax, r
     real q;
     Quadratic_Roots(A, Bh, C, oo + rb * rb, disc, &t0, &t1, &q);
 #ifndef CR_FP64
-    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3(dl, dl), oo, k, ds, rb, Dot3(dR, dR),
-                     Dot3(r->dir, r->dir), A, t0, t1, tmin, tmax))
+    if (Cone_NeedsDf(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3(dl, dl), oo, k, ds, rb,
+                     Dot3(r->dir, r->dir), A, t0, t1, tmin, tmax, os, H, r->anyHit))
       return Cone_IntersectDf(r->org, r->dir, cn, tmin, tmax, tHit);
 #endif
 #endif

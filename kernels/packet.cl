@@ -62,6 +62,7 @@ CR_FUNC void Packet_LoadRay(__local const real* sRay, __local const uint* sAxes,
   r->kx = (int)sAxes[lid];
   r->ky = (int)sAxes[nLanes + lid];
   r->kz = (int)sAxes[2 * nLanes + lid];
+  r->anyHit = 0;
 }
 
 CR_FUNC void Packet_StoreHit(__local real* sHit, __local uint* sHitG, uint lid, uint nLanes, const Hit* h)

@@ -27,6 +27,11 @@ typedef struct {
   real tmax;
   real sx, sy, sz;
   int kx, ky, kz;
+  /* An any-hit (occlusion) query: a primitive test may keep a float hit
+   * that lies in range for certain, whatever its exact t, instead of taking
+   * its double-float cold path (Sphere_NeedsDf, Cone_NeedsDf). 0 from
+   * Ray_Init; set by the traversal that knows the query. */
+  int anyHit;
 } Ray;
 
 /* Closest hit so far. g is a unified primitive index or CR_NO_HIT; t starts at
@@ -77,6 +82,7 @@ CR_FUNC void Ray_Init(Ray* r, const RayRecord* rec)
   r->kx = kx;
   r->ky = ky;
   r->kz = kz;
+  r->anyHit = 0;
   r->sx = CR_PICK3(r->dir, kx) / CR_PICK3(r->dir, kz);
   r->sy = CR_PICK3(r->dir, ky) / CR_PICK3(r->dir, kz);
   r->sz = (real)1.0f / CR_PICK3(r->dir, kz);

@@ -100,14 +100,16 @@ CR_COLD CR_FUNC int Sphere_TieOrder(const real org[3], const real dir[3], real t
  * - disc = a r^2 - cc is off by at most 8u sqrt(a ff cc) (the cross product's
  *   components cancel) + 6u dScale, its root by that over 2 sqrt(disc); bh
  *   by 5u sqrt(a ff); so q by eq below, and relatively by rel;
- * - the root q / a is within rel of itself; c / q too, plus c's error (6u
- *   cScale) over |q|: e; where Quadratic_Roots takes (sq - bh) / a instead
+ * - the root q / a is within rel of itself; c / q too, plus c's error over
+ *   |q|: e, 16u cScale (c = |f|^2 - r^2 errs by at most about 6u cScale:
+ *   f = o - c by u |f|, the sum of squares by 3u; a random search found
+ *   2.6u); where Quadratic_Roots takes (sq - bh) / a instead
  *   (16 q^2 < a cScale) that root carries eq / a, rel of the other root, so
  *   both windows take the larger root's share (m).
  * First order holds: disc's error is below a quarter of disc wherever this
  * is reached (Sphere_DiscUndecided and the 2^36 rule took the rest). */
 CR_FUNC int Sphere_NeedsDf(real c, real cScale, real bh, real disc, real dScale, real q, real a, real ff, real cc,
-                           real t0, real t1, real tmin, real tmax)
+                           real t0, real t1, real tmin, real tmax, int anyHit)
 {
   const real dd = disc * (bh * bh + disc);
   const real ds2 = dScale * dScale;
@@ -116,9 +118,13 @@ CR_FUNC int Sphere_NeedsDf(real c, real cScale, real bh, real disc, real dScale,
   const real af = a * ff;
   const real eq = 0x1.0p-20f * ((sqrt(af * cc) + dScale) / sqrt(disc) + sqrt(af));
   const real rel = eq / fabs(q) + 0x1.0p-20f;
-  const real e = 0x1.0p-18f * cScale / fabs(q);
+  const real e = 0x1.0p-20f * cScale / fabs(q);
   const real m = (real)16.0f * q * q >= a * cScale ? (real)0.0f : fmax(fabs(t0), fabs(t1));
   const real s0 = rel * fmax(fabs(t0), m) + e, s1 = rel * fmax(fabs(t1), m) + e;
+  /* An any-hit query needs no exact t: a root whose whole window lies in
+   * range is a hit for certain (a shadow ray from the ground next to a ball
+   * that hides the light). */
+  if (anyHit && ((t0 - s0 > tmin && t0 + s0 < tmax) || (t1 - s1 > tmin && t1 + s1 < tmax))) return 0;
   return (t0 + s0 >= tmin && t0 - s0 <= tmax) || (t1 + s1 >= tmin && t1 - s1 <= tmax);
 }
 
@@ -192,7 +198,7 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   real q;
   Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1, &q);
 #ifndef CR_FP64
-  if (Sphere_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax))
+  if (Sphere_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax, r->anyHit))
     return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
 #endif
 #endif

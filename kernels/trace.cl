@@ -168,6 +168,7 @@ CR_FUNC void Trace_One(const PrimView* pv, CR_TRACE_ONE_PARAMS, CR_GLOBAL const 
 {
   Ray ray;
   Ray_Init(&ray, rec);
+  ray.anyHit = CR_QUERY_ANYHIT;
   Hit hit;
   Hit_Init(&hit, &ray);
   TraceStats st = {0, 0, 0, 0};

@@ -41,8 +41,8 @@ CR_FUNC int Triangle_PlaneInexact(real np0, real np1, real np2)
 }
 CR_FUNC int Triangle_PlaneNeedsDf(real np0, real np1, real np2, real nd, real t, real tmin, real tmax)
 {
+  if (!Triangle_PlaneInexact(np0, np1, np2)) return 0;
   const real sum = (fabs(np0) + fabs(np1)) + fabs(np2);
-  if (!(sum > 16.0f * fabs((np0 + np1) + np2))) return 0;
   const real slack = 0.25f * fabs(t) + 0x1.0p-20f * sum / fabs(nd);
   return t + slack >= tmin && t - slack <= tmax;
 }
@@ -104,6 +104,27 @@ CR_FUNC int Triangle_LongEdgeUndecided(uint flags, real nA, real nB, real nC, re
   return ((flags & CR_TRI_LONG_U) && fabs(U) <= 0x1.0p-18f * (nB * nC)) ||
          ((flags & CR_TRI_LONG_V) && fabs(V) <= 0x1.0p-18f * (nC * nA)) ||
          ((flags & CR_TRI_LONG_W) && fabs(W) <= 0x1.0p-18f * (nA * nB));
+}
+/* Triangle_Intersect's cold path for a hit whose t may lie in range with the
+ * origin near the plane (Triangle_PlaneNeedsDf; A, B, C the vertices minus
+ * the origin, U, V, W the float edge functions): the edges again in
+ * double-float when all three lie within their rounding (Triangle_EdgesDf),
+ * then t from Triangle_PlaneTDf. Returns 0 when the edges now miss. The
+ * SIMD backend calls it lane by lane with the same A, B, C. */
+CR_COLD CR_FUNC int Triangle_NearPlaneRefine(const Ray* r, const Triangle* tri, const real A[3], const real B[3],
+                                             const real C[3], real* U, real* V, real* W, real* t)
+{
+  const int kx = r->kx, ky = r->ky, kz = r->kz;
+  if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
+                              Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
+                              Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), *U, *V, *W)) {
+    Triangle_EdgesDf(r, tri, U, V, W);
+    if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
+      return 0;
+    if (*U + *V + *W == (real)0.0f) return 0;
+  }
+  *t = Triangle_PlaneTDf(r->org, r->dir, tri);
+  return 1;
 }
 CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real nA, real nB, real nC, real* U,
                                           real* V, real* W)
@@ -232,9 +253,10 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   const real np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   real t = ((np0 + np1) + np2) / nd;
 #ifndef CR_FP64
-  if (Triangle_PlaneInexact(np0, np1, np2)) {
+  if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) {
     /* The origin near the triangle's plane relative to the shared vertex's
-     * distance. A float hit whose three edge functions all lie within their
+     * distance, and t may lie in [tmin, tmax] (elsewhere the float t is out
+     * of range too, and the test misses whatever the edges say). A float hit whose three edge functions all lie within their
      * rounding then may be a small triangle seen edge-on from far away, its
      * projection degenerate (two can round to 0 and the third not: an
      * "inside" at the plane's crossing, far from the triangle): the three
@@ -245,17 +267,8 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
      * marginal anyway, and no ray from inside a mesh sees one. Away from
      * the plane the crossing lies within a few ulps of the distance of the
      * triangle, and the float answer stands (docs/TOLERANCE.md). */
-    if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
-                                Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
-                                Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), U, V, W)) {
-      Triangle_EdgesDf(r, tri, &U, &V, &W);
-      if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) &&
-          (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
-        return 0;
-      det = U + V + W;
-      if (det == (real)0.0f) return 0;
-    }
-    if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
+    if (!Triangle_NearPlaneRefine(r, tri, A, B, C, &U, &V, &W, &t)) return 0;
+    det = U + V + W;
   }
 #endif
   if (!(t >= tmin && t <= tmax)) return 0;

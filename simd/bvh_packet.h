@@ -248,6 +248,7 @@ CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob
     RayPacket<N> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
+    P.anyHit = job.occlusion != 0;
     trace(P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
     Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }

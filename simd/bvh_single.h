@@ -133,6 +133,7 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
   const vfloat<N> tmin(ray.tmin);
   PackRay<K> pr;
   PackRay_Init<K>(pr, ray);
+  pr.anyHit = anyHit != 0;
   std::uint32_t ref = 0;
   for (;;) {
     if (!(ref & kWideLeafFlag)) {
@@ -217,6 +218,7 @@ CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>&
     ray.sx = s[0][l];
     ray.sy = s[1][l];
     ray.sz = s[2][l];
+    ray.anyHit = P.anyHit ? 1 : 0;
     ray.kx = static_cast<int>(k[0][l]);
     ray.ky = static_cast<int>(k[1][l]);
     ray.kz = static_cast<int>(k[2][l]);

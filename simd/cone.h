@@ -78,35 +78,48 @@ struct SimdPrim<Cone> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// Cone_NeedsDf of kernels/intersect.h, lane by lane.
+// Cone_NeedsDf of kernels/cone.h, lane by lane, for the lanes not in `skip`
+// (misses and the linear case, which the scalar test never asks about; a
+// missing lane, disc < 0, would pass the cancellation rule and cost the
+// windows of the whole vector).
 template <int N>
 CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc, vfloat<N> ee,
                                       vfloat<N> xx, vfloat<N> q, vfloat<N> dl2, vfloat<N> oo, vfloat<N> k,
-                                      vfloat<N> ds, vfloat<N> rb, vfloat<N> dRdR, vfloat<N> dd, vfloat<N> A,
-                                      vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
+                                      vfloat<N> ds, vfloat<N> rb, vfloat<N> dd, vfloat<N> A,
+                                      vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax, vfloat<N> os,
+                                      vfloat<N> H, vbool<N> skip, bool anyHit)
 {
   const vfloat<N> dScale = ee + xx;
   const vfloat<N> d2 = disc * (Bh * Bh + disc);
   const vfloat<N> ds2 = dScale * dScale;
-  const vbool<N> inaccurate =
-      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * d2) | (dl2 > vfloat<N>(64.0f) * oo);
+  const vbool<N> inaccurate = AndNot(
+      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * d2) | (dl2 > vfloat<N>(64.0f) * oo), skip);
   if (None(inaccurate)) return inaccurate;
-  const vfloat<N> ndl = Sqrt(dl2), ndR = Sqrt(dRdR), nd = Sqrt(dd), noR = Sqrt(oo), kds = Abs(k * ds);
-  const vfloat<N> Ee =
-      vfloat<N>(0x1.0p-20f) * ((Abs(k) * ndl + Abs(rb)) * ndR + Abs(rb) * nd + kds * ndl);
-  const vfloat<N> Ex = vfloat<N>(0x1.0p-19f) * (ndl * ndR + noR * nd);
-  const vfloat<N> eDisc = vfloat<N>(2.0f) * (Sqrt(ee) * Ee + Sqrt(xx) * Ex) + vfloat<N>(0x1.0p-21f) * dScale;
-  const vfloat<N> eB = vfloat<N>(0x1.0p-20f) * (ndl * (ndR + Abs(k) * kds) + noR * nd + kds * Abs(rb));
-  const vfloat<N> eA = vfloat<N>(0x1.0p-19f) * (ndR * nd + kds * kds + Abs(k) * kds * nd);
-  const vfloat<N> eq = eDisc / (vfloat<N>(2.0f) * Sqrt(disc)) + eB;
-  const vfloat<N> rel = eq / Abs(q) + eA / Abs(A) + vfloat<N>(0x1.0p-20f);
+  const vfloat<N> ndl = Sqrt(dl2), nd = Sqrt(dd), noR = Sqrt(oo), kds = Abs(k * ds), ak = Abs(k), arb = Abs(rb);
+  const vfloat<N> Ee = vfloat<N>(0x1.0p-20f) * ((ak * ndl + vfloat<N>(2.0f) * arb) * nd + kds * ndl);
+  const vfloat<N> Ex = vfloat<N>(0x1.0p-19f) * ((ndl + noR) * nd);
+  const vfloat<N> eDisc = vfloat<N>(2.0f) * Sqrt(dScale) * (Ee + Ex) + vfloat<N>(0x1.0p-21f) * dScale;
+  const vfloat<N> eB = vfloat<N>(0x1.0p-20f) * (ndl * (nd + ak * kds) + noR * nd + kds * arb);
+  const vfloat<N> eA = vfloat<N>(0x1.0p-19f) * (dd + kds * (kds + ak * nd));
+  const vfloat<N> iq = vfloat<N>(1.0f) / Abs(q);
+  const vfloat<N> rel =
+      (eDisc / (vfloat<N>(2.0f) * Sqrt(disc)) + eB) * iq + eA / Abs(A) + vfloat<N>(0x1.0p-20f);
   const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * d2) | (dl2 > vfloat<N>(0x1.0p36f) * oo) |
                           !(disc > vfloat<N>(0.0f)) |
                           !((eDisc < vfloat<N>(0.25f) * disc) & (rel < vfloat<N>(0.0625f)));
-  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * (cScale + ndl * (noR + Abs(k * rb))) / Abs(q);
+  const vfloat<N> e = vfloat<N>(0x1.0p-20f) * (cScale + ndl * (noR + vfloat<N>(4.0f) * Abs(k * rb))) * iq;
   const vfloat<N> m = Select(vfloat<N>(16.0f) * q * q >= A * cScale, vfloat<N>(0.0f), FMax(Abs(t0), Abs(t1)));
   const vfloat<N> s0 = rel * FMax(Abs(t0), m) + e, s1 = rel * FMax(Abs(t1), m) + e;
-  const vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
+  const vfloat<N> a0 = os + t0 * ds, a1 = os + t1 * ds;
+  const vfloat<N> ea0 = vfloat<N>(0x1.0p-20f) * (ndl + Abs(t0) * nd + H) + Abs(ds) * s0;
+  const vfloat<N> ea1 = vfloat<N>(0x1.0p-20f) * (ndl + Abs(t1) * nd + H) + Abs(ds) * s1;
+  const vfloat<N> zero(0.0f);
+  vbool<N> window =
+      ((t0 + s0 >= tmin) & (t0 - s0 <= tmax) & (a0 + ea0 >= zero) & (a0 - ea0 <= H)) |
+      ((t1 + s1 >= tmin) & (t1 - s1 <= tmax) & (a1 + ea1 >= zero) & (a1 - ea1 <= H));
+  if (anyHit)
+    window = AndNot(window, ((t0 - s0 > tmin) & (t0 + s0 < tmax) & (a0 - ea0 > zero) & (a0 + ea0 < H)) |
+                                ((t1 - s1 > tmin) & (t1 + s1 < tmax) & (a1 - ea1 > zero) & (a1 + ea1 < H)));
   return inaccurate & (always | window);
 }
 
@@ -117,7 +130,7 @@ CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> B
 template <bool kFast, int N, class ConeOf>
 CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> dl[3], const vfloat<N> dir[3],
                                         const vfloat<N> w[3], vfloat<N> H, vfloat<N> r0, vfloat<N> k, vfloat<N> tmin,
-                                        vfloat<N> tmax, vfloat<N>& tHit, ConeOf&& coneOf)
+                                        vfloat<N> tmax, vfloat<N>& tHit, bool anyHit, ConeOf&& coneOf)
 {
   const vfloat<N> zero(0.0f);
   vbool<N> miss = !(H > zero);
@@ -164,9 +177,8 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
     }
     vfloat<N> q;
     Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1, q);
-    refine = AndNot(Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3N<N>(dl, dl), oo, k, ds, rb,
-                                    Dot3N<N>(dR, dR), Dot3N<N>(dir, dir), A, t0, t1, tmin, tmax),
-                    miss | linear | quadMiss) |
+    refine = Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3N<N>(dl, dl), oo, k, ds, rb,
+                              Dot3N<N>(dir, dir), A, t0, t1, tmin, tmax, os, H, miss | linear | quadMiss, anyHit) |
              undecided;
   }
   t0 = Select(linear, tLin, t0);
@@ -211,7 +223,7 @@ struct SimdTest<Cone> {
     }
     const Cone* cone = &ScenePrims<Cone>(sc)[i];
     return Cone_IntersectN<kFast, N>(P.org, dl, P.dir, w, vfloat<N>(cd.H), vfloat<N>(cd.r0), vfloat<N>(cd.k), P.tmin,
-                                     tmax, t, [cone](int) { return cone; });
+                                     tmax, t, P.anyHit, [cone](int) { return cone; });
   }
   template <int K, bool kFast>
   CR_SIMD_INLINE static vbool<K> Pack(const KernelScene& sc, const ConePack<K>& pk, vbool<K> valid,
@@ -223,7 +235,7 @@ struct SimdTest<Cone> {
       w[i] = vfloat<K>::Load(pk.w[i]);
     }
     return Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
-                                     vfloat<K>::Load(pk.k), pr.tmin, tmax, t, [&](int l) {
+                                     vfloat<K>::Load(pk.k), pr.tmin, tmax, t, pr.anyHit, [&](int l) {
                                        return valid.Bits() >> l & 1u
                                                   ? &ScenePrims<Cone>(sc)[Prim_Local(&sc.ranges, CR_PRIM_CONE, pk.g[l])]
                                                   : nullptr;
@@ -246,7 +258,8 @@ struct SimdTest<Cone> {
     LoadTransposed4(rows, r2);
     vfloat<4> dl[3];
     for (int a = 0; a < 3; ++a) dl[a] = pr.org[a] - r0[a];
-    return Cone_IntersectN<kFast, 4>(pr.org, dl, pr.dir, r1, r0[3], r1[3], r2[0], pr.tmin, tmax, t, [&](int l) {
+    return Cone_IntersectN<kFast, 4>(pr.org, dl, pr.dir, r1, r0[3], r1[3], r2[0], pr.tmin, tmax, t, pr.anyHit,
+                                     [&](int l) {
       return &ScenePrims<Cone>(sc)[Prim_Local(&sc.ranges, CR_PRIM_CONE, g[l])];
     });
   }

@@ -83,6 +83,7 @@ CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& 
   const GridHeader& g = *sc.gridHeader;
   PackRay<4> pr;
   PackRay_Init<4>(pr, ray);
+  pr.anyHit = anyHit != 0;
   // Per axis: cell coordinate, step, exit plane crossing, and the change of
   // the cell index per step (strides 1, res x, res x res y).
   int cell[3], step[3], res[3], dIdx[3];

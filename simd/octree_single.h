@@ -53,6 +53,7 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
   if constexpr (kStats) ++st.nTS;
   PackRay<4> pr;
   PackRay_Init<4>(pr, ray);
+  pr.anyHit = anyHit != 0;
   // Octree_Leaf: true when the query is answered.
   auto leaf = [&](const OctreeNode& n, float tExit) {
     if constexpr (kStats) {

@@ -155,6 +155,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
     }
     pr.tmin = vfloat<4>(P.tmin[l]);
     pr.dd = vfloat<4>(P.dd[l]);
+    pr.anyHit = anyHit != 0;
     Hit hit;
     hit.t = H.t[l];
     hit.u = H.u[l];

@@ -27,6 +27,8 @@ struct RayPacket {
   // bmax[a] as BVHNode lays them out), and the per-lane plane choice is skipped.
   bool sameSigns;
   int nearOff[3], farOff[3];
+  // An any-hit (occlusion) query: Ray::anyHit of kernels/ray.h for every lane.
+  bool anyHit = false;
 };
 
 template <int N>
@@ -108,6 +110,7 @@ struct PackRay {
   vfloat<K> tmin;
   vfloat<K> dd;  // d.d, for the sphere test
   int k[3];
+  bool anyHit = false;  // Ray::anyHit
 };
 
 template <int K>
@@ -126,6 +129,7 @@ CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
   pr.s[2] = vfloat<K>(r.sz);
   pr.tmin = vfloat<K>(r.tmin);
   pr.dd = Dot3N<K>(pr.dir, pr.dir);
+  pr.anyHit = r.anyHit != 0;
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

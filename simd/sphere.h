@@ -35,24 +35,31 @@ struct SimdPrim<Sphere> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// Sphere_NeedsDf of kernels/intersect.h, lane by lane.
+// Sphere_NeedsDf of kernels/sphere.h, lane by lane, for the lanes not in
+// `miss` (the scalar test returns before it on a miss; here a missing lane,
+// disc < 0, would pass the cancellation rule and cost the windows of the
+// whole vector).
 template <int N>
 CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N> bh, vfloat<N> disc,
                                         vfloat<N> dScale, vfloat<N> q, vfloat<N> a, vfloat<N> ff, vfloat<N> cc,
-                                        vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax)
+                                        vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax, vbool<N> miss,
+                                        bool anyHit)
 {
   const vfloat<N> dd = disc * (bh * bh + disc);
   const vfloat<N> ds2 = dScale * dScale;
-  const vbool<N> inaccurate = (cScale > vfloat<N>(8.0f) * Abs(c)) | (ds2 > vfloat<N>(64.0f) * dd);
+  const vbool<N> inaccurate =
+      AndNot((cScale > vfloat<N>(8.0f) * Abs(c)) | (ds2 > vfloat<N>(64.0f) * dd), miss);
   if (None(inaccurate)) return inaccurate;
   const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * dd) | !(disc > vfloat<N>(0.0f));
   const vfloat<N> af = a * ff;
   const vfloat<N> eq = vfloat<N>(0x1.0p-20f) * ((Sqrt(af * cc) + dScale) / Sqrt(disc) + Sqrt(af));
   const vfloat<N> rel = eq / Abs(q) + vfloat<N>(0x1.0p-20f);
-  const vfloat<N> e = vfloat<N>(0x1.0p-18f) * cScale / Abs(q);
+  const vfloat<N> e = vfloat<N>(0x1.0p-20f) * cScale / Abs(q);
   const vfloat<N> m = Select(vfloat<N>(16.0f) * q * q >= a * cScale, vfloat<N>(0.0f), FMax(Abs(t0), Abs(t1)));
   const vfloat<N> s0 = rel * FMax(Abs(t0), m) + e, s1 = rel * FMax(Abs(t1), m) + e;
-  const vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
+  vbool<N> window = ((t0 + s0 >= tmin) & (t0 - s0 <= tmax)) | ((t1 + s1 >= tmin) & (t1 - s1 <= tmax));
+  if (anyHit)
+    window = AndNot(window, ((t0 - s0 > tmin) & (t0 + s0 < tmax)) | ((t1 - s1 > tmin) & (t1 + s1 < tmax)));
   return inaccurate & (always | window);
 }
 
@@ -63,7 +70,8 @@ CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N>
 // double-float test (Sphere_IntersectDf).
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
-                                          vfloat<N> a, vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit)
+                                          vfloat<N> a, vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
+                                          bool anyHit)
 {
   vfloat<N> f[3];
   for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
@@ -104,7 +112,7 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
     vfloat<N> q;
     Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1, q);
     const vbool<N> refine =
-        undecided | AndNot(Sphere_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax), miss);
+        undecided | Sphere_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax, miss, anyHit);
     if (Any(refine)) {
       const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
       const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
@@ -140,7 +148,7 @@ struct SimdTest<Sphere> {
   {
     const Sphere& sp = PrimData<Sphere>(sc)[g];
     const vfloat<N> cen[3] = {vfloat<N>(sp.center[0]), vfloat<N>(sp.center[1]), vfloat<N>(sp.center[2])};
-    return Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, P.dd, vfloat<N>(sp.radius), P.tmin, tmax, t);
+    return Sphere_IntersectN<kFast, N>(P.org, cen, P.dir, P.dd, vfloat<N>(sp.radius), P.tmin, tmax, t, P.anyHit);
   }
   // The K spheres of a pack against one ray.
   template <int K, bool kFast>
@@ -149,7 +157,8 @@ struct SimdTest<Sphere> {
   {
     vfloat<K> cen[3];
     for (int i = 0; i < 3; ++i) cen[i] = vfloat<K>::Load(pk.center[i]);
-    return Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius), pr.tmin, tmax, t);
+    return Sphere_IntersectN<kFast, K>(pr.org, cen, pr.dir, pr.dd, vfloat<K>::Load(pk.radius), pr.tmin, tmax, t,
+                                       pr.anyHit);
   }
   // Spheres g[0..4) gathered from the scene's rows by a 4x4 transpose.
   template <bool kFast>
@@ -160,7 +169,7 @@ struct SimdTest<Sphere> {
     for (int l = 0; l < 4; ++l) rows[l] = PrimData<Sphere>(sc)[g[l]].center;
     vfloat<4> s[4];
     LoadTransposed4(rows, s);
-    return Sphere_IntersectN<kFast, 4>(pr.org, s, pr.dir, pr.dd, s[3], pr.tmin, tmax, t);
+    return Sphere_IntersectN<kFast, 4>(pr.org, s, pr.dir, pr.dd, s[3], pr.tmin, tmax, t, pr.anyHit);
   }
 };
 

@@ -183,6 +183,19 @@ struct OnePlane {
 // functions: refine(ray, tri, l, &U, &V, &W) with the lane's ray prepared as
 // the scalar kernels prepare it (Ray_Init) and its triangle from the plane
 // source (Triangle_RefineEdges, Triangle_EdgesDf of kernels/intersect.h).
+// Lane l of a packet as the scalar kernels' Ray over [0, inf) (the cold
+// paths read its origin, direction and shear only).
+template <int N>
+CR_SIMD_INLINE Ray LaneRay(const vfloat<N> org[3], const vfloat<N> dir[3], int l)
+{
+  RayRecord rec{};
+  Lane3<N>(org, l, rec.org);
+  Lane3<N>(dir, l, rec.dir);
+  rec.tmax = __builtin_inff();
+  Ray ray;
+  Ray_Init(&ray, &rec);
+  return ray;
+}
 template <int N>
 struct EdgeFunctions {
   vfloat<N> U, V, W;
@@ -199,16 +212,51 @@ __attribute__((noinline, cold)) EdgeFunctions<N> Triangle_EdgeLanesN(unsigned bi
   W.Store(w);
   for (; bits; bits &= bits - 1) {
     const int l = LowestBit(bits);
-    RayRecord rec{};
-    Lane3<N>(org, l, rec.org);
-    Lane3<N>(dir, l, rec.dir);
-    rec.tmax = __builtin_inff();
-    Ray ray;
-    Ray_Init(&ray, &rec);
+    const Ray ray = LaneRay<N>(org, dir, l);
     const Triangle tri = plane.Tri(l);
     refine(ray, tri, l, &u[l], &v[l], &w[l]);
   }
   return {vfloat<N>::Load(u), vfloat<N>::Load(v), vfloat<N>::Load(w)};
+}
+
+// Lanes near their triangle's plane whose t may lie in range: the scalar
+// kernels' Triangle_NearPlaneRefine lane by lane (the edges in double-float
+// when all three lie within their rounding, then t in double-float), with
+// the translated vertices computed as there (the same subtractions as the
+// vector ones, so the same bits). Out of line: the hot caller keeps no
+// translated vertex alive past the edge functions for it.
+template <int N>
+struct NearPlaneLanes {
+  vfloat<N> U, V, W, t;
+  vbool<N> miss;
+};
+template <int N, class PlaneFn>
+__attribute__((noinline, cold)) NearPlaneLanes<N> Triangle_NearPlaneLanesN(unsigned bits, PlaneFn plane,
+                                                                           const vfloat<N> org[3],
+                                                                           const vfloat<N> dir[3], vfloat<N> U,
+                                                                           vfloat<N> V, vfloat<N> W, vfloat<N> t,
+                                                                           vbool<N> miss)
+{
+  alignas(32) float u[N], v[N], w[N], tt[N];
+  U.Store(u);
+  V.Store(v);
+  W.Store(w);
+  t.Store(tt);
+  unsigned missBits = 0;
+  for (; bits; bits &= bits - 1) {
+    const int l = LowestBit(bits);
+    const Ray ray = LaneRay<N>(org, dir, l);
+    const Triangle tri = plane.Tri(l);
+    float A[3], B[3], C[3];
+    for (int i = 0; i < 3; ++i) {
+      A[i] = tri.v0[i] - ray.org[i];
+      B[i] = tri.v1[i] - ray.org[i];
+      C[i] = tri.v2[i] - ray.org[i];
+    }
+    if (!Triangle_NearPlaneRefine(&ray, &tri, A, B, C, &u[l], &v[l], &w[l], &tt[l])) missBits |= 1u << l;
+  }
+  return {vfloat<N>::Load(u), vfloat<N>::Load(v), vfloat<N>::Load(w), vfloat<N>::Load(tt),
+          miss | vbool<N>::FromBits(missBits)};
 }
 
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
@@ -261,52 +309,31 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     tHit = uHit = vHit = zero;
     return vbool<N>(false);
   }
-  // t from the triangle's plane, as kernels/intersect.h computes it (in world
+  // t from the triangle's plane, as kernels/triangle.h computes it (in world
   // axis order, which the sums' rounding depends on). Where n . p cancels
   // (the origin near the plane: Triangle_PlaneInexact), as there: float hits
   // whose three edge functions all lie within their rounding
   // (Triangle_EdgesUndecided) take the scalar kernels' Triangle_EdgesDf, and
   // lanes whose t may lie in [tmin, tmax] Triangle_PlaneTDf, lane by lane.
+  // Only lanes whose t may lie in range need either: elsewhere the float t
+  // is out of range too, and the lane misses whatever the edges say (a
+  // shadow ray leaving a face, t just behind its origin, stays here).
   vbool<N> inexact;
   vfloat<N> sumOverNd;
   vfloat<N> t = plane.T(org, dir, miss, inexact, sumOverNd);
-  const vbool<N> nearPlane = AndNot(inexact, miss);
+  vbool<N> nearPlane = AndNot(inexact, miss);
   if (Any(nearPlane)) {
-    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
-    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
-    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
-    const vfloat<N> k(0x1.0p-19f);
-    const vbool<N> undecided =
-        nearPlane & (Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB));
-    if (Any(undecided)) {
-      const EdgeFunctions<N> e = Triangle_EdgeLanesN<N>(
-          undecided.Bits(), plane, org, dir, U, V, W,
-          [](const Ray& ray, const Triangle& tri, int, float* u, float* v, float* w) {
-            Triangle_EdgesDf(&ray, &tri, u, v, w);
-          });
-      U = e.U;
-      V = e.V;
-      W = e.W;
-      miss = miss | (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero)));
-      det = U + V + W;
-      miss = miss | (det == zero);
-      if (All(miss)) {
-        tHit = uHit = vHit = zero;
-        return vbool<N>(false);
-      }
-    }
     const vfloat<N> slack = vfloat<N>(0.25f) * Abs(t) + sumOverNd;
-    const vbool<N> refine = AndNot(inexact & (t + slack >= tmin) & (t - slack <= tmax), miss);
-    if (Any(refine)) {
-      t = RefineLanesN<N>(refine.Bits(), [=](int l, float* th) {
-        float o[3], d[3];
-        Lane3<N>(org, l, o);
-        Lane3<N>(dir, l, d);
-        const Triangle tri = plane.Tri(l);
-        *th = Triangle_PlaneTDf(o, d, &tri);
-        return true;
-      }, t, vbool<N>(true)).t;
-    }
+    nearPlane = nearPlane & (t + slack >= tmin) & (t - slack <= tmax);
+  }
+  if (Any(nearPlane)) {
+    const NearPlaneLanes<N> r = Triangle_NearPlaneLanesN<N>(nearPlane.Bits(), plane, org, dir, U, V, W, t, miss);
+    U = r.U;
+    V = r.V;
+    W = r.W;
+    t = r.t;
+    miss = r.miss;
+    det = U + V + W;
   }
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;

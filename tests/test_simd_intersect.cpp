@@ -7,6 +7,7 @@
 // form (N rays against one primitive) and the single-ray form (one ray
 // against a pack of K primitives). Answers must agree bit for bit.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -353,6 +354,191 @@ TEST_CASE("simd intersectors: slab tests with zero directions, origins on planes
       INFO("width ", pr.width, fast ? " fast" : " robust");
       CHECK(tally.mismatches == 0);
       CHECK(tally.hits > 0);
+    }
+  }
+}
+
+namespace {
+
+// Rays that leave surfaces, as secondary rays do: origins on a tree's
+// joints (a cone and the next one meeting at a sphere), on a ground sphere
+// of radius 1e6, on a fan of coplanar triangles and on a thin cylinder far
+// from the world origin, each moved off its surface by the ray generator's
+// error bound (host/scene/surface.h: 2^-19 S + 2^-22 |p|) to either side,
+// and by smaller offsets (the renderer's, and below), with directions
+// over the hemisphere it faces, to a point light (tmax 1)
+// or unbounded, and a quarter of them back through the surface. These are
+// the rays whose roots robust mode decides in
+// windows (Sphere_NeedsDf, Cone_NeedsDf, Triangle_PlaneNeedsDf), and that a
+// window too narrow gets wrong.
+struct SurfaceScene : simd::ProbeScene {
+  SurfaceScene()
+  {
+    scene.spheres.push_back(Sphere{{0.0f, 0.0f, 1.0f}, 0.1005f});
+    scene.spheres.push_back(Sphere{{0.417812f, 0.0f, 1.49793f}, 0.067335f});
+    scene.spheres.push_back(Sphere{{0.0f, -1.0e6f, 0.0f}, 999990.0f});
+    for (int i = 0; i < 4; ++i) {  // a fan around (0.3, 0.2, -0.4) in one tilted plane
+      const double a0 = i * 1.5707963267948966, a1 = a0 + 1.5707963267948966;
+      auto P = [](double a) {
+        return std::array<float, 3>{float(0.3 + 0.5 * std::cos(a)), float(0.2 + 0.5 * std::sin(a)),
+                                    float(-0.4 + 0.25 * std::cos(a) + 0.1 * std::sin(a))};
+      };
+      const auto p = P(a0), q = P(a1);
+      scene.triangles.push_back(Triangle{{0.3f, 0.2f, -0.4f}, 0u, {p[0], p[1], p[2]}, 0u, {q[0], q[1], q[2]}, 0u});
+    }
+    scene.cones.push_back(Cone{{0.0f, 0.0f, 0.0f}, 0.15f, {0.0f, 0.0f, 1.0f}, 0.1005f});
+    scene.cones.push_back(Cone{{0.0f, 0.0f, 1.0f}, 0.1005f, {0.417812f, 0.0f, 1.49793f}, 0.067335f});
+    scene.cones.push_back(Cone{{0.417812f, 0.0f, 1.49793f}, 0.067335f, {0.625853f, 0.271578f, 1.74586f}, 0.0451145f});
+    scene.cones.push_back(Cone{{1000.0f, 2000.0f, 3000.0f}, 0.5f, {1003.0f, 2004.0f, 3012.0f}, 0.5f});  // far cylinder
+    Finish();
+  }
+};
+
+struct SurfacePoint3 {
+  double p[3], n[3];
+};
+
+// A point of primitive g's surface (in double) with its unit normal.
+SurfacePoint3 PointOn(const Scene& s, const PrimRanges& c, std::uint32_t g, std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  SurfacePoint3 out{};
+  if (Prim_Is(&c, CR_PRIM_SPHERE, g)) {
+    const Sphere& sp = s.spheres[Prim_Local(&c, CR_PRIM_SPHERE, g)];
+    const double z = 2.0 * u(rng) - 1.0, ph = 6.283185307179586 * u(rng), r = std::sqrt(1.0 - z * z);
+    double n[3] = {r * std::cos(ph), r * std::sin(ph), z};
+    if (sp.radius > 1e5f) n[0] *= 1e-5, n[1] = 1.0, n[2] *= 1e-5;  // the top of the ground sphere
+    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int i = 0; i < 3; ++i) out.n[i] = n[i] / l, out.p[i] = sp.center[i] + double(sp.radius) * out.n[i];
+  } else if (Prim_Is(&c, CR_PRIM_TRIANGLE, g)) {
+    const Triangle& t = s.triangles[Prim_Local(&c, CR_PRIM_TRIANGLE, g)];
+    double a = u(rng), b = u(rng);
+    if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+    double e1[3], e2[3];
+    for (int i = 0; i < 3; ++i) {
+      e1[i] = double(t.v1[i]) - t.v0[i], e2[i] = double(t.v2[i]) - t.v0[i];
+      out.p[i] = t.v0[i] + a * e1[i] + b * e2[i];
+    }
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int i = 0; i < 3; ++i) out.n[i] = n[i] / l;
+  } else {
+    const Cone& cn = s.cones[Prim_Local(&c, CR_PRIM_CONE, g)];
+    double w[3], H = 0.0;
+    for (int i = 0; i < 3; ++i) w[i] = double(cn.apex[i]) - cn.base[i], H += w[i] * w[i];
+    H = std::sqrt(H);
+    for (double& x : w) x /= H;
+    const double a2[3] = {std::fabs(w[0]) > 0.6 ? 0.0 : 1.0, std::fabs(w[0]) > 0.6 ? 1.0 : 0.0, 0.0};
+    double e[3] = {w[1] * a2[2] - w[2] * a2[1], w[2] * a2[0] - w[0] * a2[2], w[0] * a2[1] - w[1] * a2[0]};
+    const double el = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    for (double& x : e) x /= el;
+    const double f[3] = {w[1] * e[2] - w[2] * e[1], w[2] * e[0] - w[0] * e[2], w[0] * e[1] - w[1] * e[0]};
+    const double k = (double(cn.apexRadius) - cn.baseRadius) / H, sAx = H * u(rng), ph = 6.283185307179586 * u(rng);
+    const double rs = cn.baseRadius + k * sAx;
+    double n[3], nl = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double radial = std::cos(ph) * e[i] + std::sin(ph) * f[i];
+      out.p[i] = cn.base[i] + sAx * w[i] + rs * radial;
+      n[i] = radial - k * w[i];
+      nl += n[i] * n[i];
+    }
+    for (int i = 0; i < 3; ++i) out.n[i] = n[i] / std::sqrt(nl);
+  }
+  return out;
+}
+
+// Rays leaving each primitive of the scene, n per primitive.
+std::vector<RayRecord> RaysLeaving(const simd::ProbeScene& ps, int n, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<RayRecord> rays;
+  const PrimRanges& c = ps.sc.ranges;
+  for (std::uint32_t g = 0; g < c.begin[CR_NUM_PRIM_TYPES]; ++g) {
+    for (int i = 0; i < n; ++i) {
+      const SurfacePoint3 sp = PointOn(ps.scene, c, g, rng);
+      double S = 0.0, pm = 0.0;  // the primitive's scale (its bounds) and |p|
+      const Bounds b = ps.scene.UnifiedBounds(g);
+      for (int a = 0; a < 3; ++a) S = std::max({S, std::fabs(double(b.lo[a])), std::fabs(double(b.hi[a]))});
+      for (double x : sp.p) pm = std::max(pm, std::fabs(x));
+      // Offsets: the ray generator's bound, the renderer's robust offset
+      // (2^-21 |p| + 2^-40 S) and smaller ones, down to where only the exact
+      // cold path tells the sides apart.
+      const int kind = (i / 4) % 3;
+      const double side = (i & 1) ? 1.0 : -1.0;
+      const double off = kind == 0   ? std::ldexp(S, -19) + std::ldexp(pm, -22)
+                         : kind == 1 ? std::ldexp(pm, -21) + std::ldexp(S, -40)
+                                     : std::ldexp(S, -22 - int(10.0 * (0.5 + 0.5 * u(rng))));
+      double d[3], dn = 0.0;
+      for (int a = 0; a < 3; ++a) d[a] = u(rng), dn += d[a] * sp.n[a];
+      // Away from the side it sits on, or (one in four) back through the
+      // surface it sits 2^-19 S above, as a refracted or a badly offset ray.
+      const bool through = (i & 3) == 3;
+      if ((dn * side < 0.0) != through)
+        for (double& x : d) x = -x;
+      const bool toLight = (i & 2) != 0;
+      const double len = toLight ? 10.0 * S + 1.0 : 1.0;
+      rays.push_back(MakeRay(float(sp.p[0] + side * off * sp.n[0]), float(sp.p[1] + side * off * sp.n[1]),
+                             float(sp.p[2] + side * off * sp.n[2]), float(len * d[0]), float(len * d[1]),
+                             float(len * d[2]), 0.0f, toLight ? 1.0f : INFINITY));
+    }
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST_CASE("robust intersectors: rays leaving surfaces agree with fp64, and SIMD with scalar bit for bit")
+{
+  SurfaceScene ps;
+  const PrimRanges c = ps.sc.ranges;
+  const auto rays = RaysLeaving(ps, 300, 7);
+  KernelArgs a;
+#define CR_TEST_ARGS_ARRAY_(T, U, array) a.array = ps.scene.array.data();
+  CR_PRIM_TYPES(CR_TEST_ARGS_ARRAY_)
+#undef CR_TEST_ARGS_ARRAY_
+  a.ranges = c;
+  // Every ray against every primitive, robust against fp64: the same hit or
+  // miss, and t within a few ulps of the ray's scale (the origins sit 2^-19
+  // of the primitive's scale off the surface, far outside any window, so
+  // nothing here is marginal).
+  std::uint64_t hits = 0, flips = 0, far = 0, anyFlips = 0;
+  for (const RayRecord& r : rays) {
+    const double scale = std::max({std::fabs(r.org[0]), std::fabs(r.org[1]), std::fabs(r.org[2])}) /
+                         std::max({std::fabs(r.dir[0]), std::fabs(r.dir[1]), std::fabs(r.dir[2])});
+    for (std::uint32_t g = 0; g < c.begin[CR_NUM_PRIM_TYPES]; ++g) {
+      ProbeResult rb, fp;
+      rb.hit = k_robust::IntersectPiece(a, g, r, &rb.t, &rb.u, &rb.v);
+      fp.hit = k_fp64::IntersectPiece(a, g, r, &fp.t, &fp.u, &fp.v);
+      // The any-hit query (which may keep a float hit certainly in range)
+      // finds the same hit or miss.
+      ProbeResult any;
+      any.hit = k_robust::IntersectPiece(a, g, r, &any.t, &any.u, &any.v, true);
+      anyFlips += (any.hit != 0) != (fp.hit != 0) ? 1 : 0;
+      if (rb.hit != fp.hit) {
+        if (++flips <= 5)
+          MESSAGE(fmt::format("g={} org=({:a},{:a},{:a}) dir=({:a},{:a},{:a}) tmax={}: robust hit={} t={} fp64 hit={} t={}",
+                              g, r.org[0], r.org[1], r.org[2], r.dir[0], r.dir[1], r.dir[2], r.tmax, rb.hit, rb.t,
+                              fp.hit, fp.t));
+        continue;
+      }
+      if (!rb.hit) continue;
+      ++hits;
+      if (std::fabs(double(rb.t) - fp.t) > 0x1.0p-20 * (scale + fp.t)) ++far;
+    }
+  }
+  CHECK(flips == 0);
+  CHECK(anyFlips == 0);
+  CHECK(far == 0);
+  CHECK(hits > 400);
+  unsigned seed = 11;
+  for (const KernelProbes& pr : AvailableProbes()) {
+    for (unsigned type = 0; type < CR_NUM_PRIM_TYPES; ++type) {
+      if (c.begin[type] == c.begin[type + 1]) continue;
+      const Tally t = ProbePrims(pr, ps, RaysLeaving(ps, 60, seed++), c.begin[type], c.begin[type + 1], false);
+      INFO("width ", pr.width, " type ", type);
+      CHECK(t.mismatches == 0);
+      CHECK(t.hits > 10);
     }
   }
 }

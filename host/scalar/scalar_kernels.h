@@ -27,14 +27,16 @@ struct KernelArgs {
 
 // Per precision mode: TraceRange traces rays [begin, end); IntersectPiece
 // tests unified piece g alone against one ray from a fresh hit
-// (Prim_Intersect), 1 on a hit, with its t, u, v as the hit holds them;
+// (Prim_Intersect), 1 on a hit, with its t, u, v as the hit holds them (an
+// any-hit query when anyHit: a hit certainly in range may keep its float t);
 // IntersectBounds the slab test of a bounding box (Box_Intersect) over the
 // ray's [tmin, tmax], with its entry. The last two are the unit tests'
 // scalar oracle.
 #define CR_DECLARE_KERNEL_NS(ns)                                                                              \
   namespace ns {                                                                                              \
   void TraceRange(const KernelArgs& args, std::size_t begin, std::size_t end, bool occlusion, TraceStatsSum* sum); \
-  int IntersectPiece(const KernelArgs& args, std::uint32_t g, const RayRecord& ray, float* t, float* u, float* v); \
+  int IntersectPiece(const KernelArgs& args, std::uint32_t g, const RayRecord& ray, float* t, float* u, float* v, \
+                     bool anyHit = false);                                                                     \
   int IntersectBounds(const float lo[3], const float hi[3], const RayRecord& ray, float* tEnter);             \
   }
 CR_DECLARE_KERNEL_NS(k_robust)
