@@ -42,9 +42,11 @@ CR_FUNC int Triangle_PlaneInexact(real np0, real np1, real np2)
 CR_FUNC int Triangle_PlaneNeedsDf(real np0, real np1, real np2, real nd, real t, real tmin, real tmax)
 {
   if (!Triangle_PlaneInexact(np0, np1, np2)) return 0;
+  /* Scaled by |nd| (one division fewer; the SIMD backend's form). */
   const real sum = (fabs(np0) + fabs(np1)) + fabs(np2);
-  const real slack = 0.25f * fabs(t) + 0x1.0p-20f * sum / fabs(nd);
-  return t + slack >= tmin && t - slack <= tmax;
+  const real an = fabs(nd), tn = t * an;
+  const real slack = 0.25f * fabs(tn) + 0x1.0p-20f * sum;
+  return tn + slack >= tmin * an && tn - slack <= tmax * an;
 }
 
 /* One watertight edge function P'x Q'y - P'y Q'x of the vertices p, q

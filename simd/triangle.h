@@ -40,19 +40,23 @@ struct SimdPrim<Triangle> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// n . p / nd with the products summed in Dot3's order; `inexact`: the lanes
-// where n . p cancels by more than 16 (Triangle_Intersect's cold-path rule).
+// n . p / nd with the products summed in Dot3's order; `nearPlane`: the
+// lanes where Triangle_PlaneNeedsDf holds (n . p cancels by more than 16 and
+// t may lie in [tmin, tmax]), computed as there, without a branch (most
+// tests past the edge functions of a ray leaving a surface are inexact, and
+// a branch on it mispredicts) and without a second division.
 template <int N>
-CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], vfloat<N> nd,
-                                            vbool<N>& inexact, vfloat<N>& sumOverNd)
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], vfloat<N> nd, vfloat<N> tmin,
+                                            vfloat<N> tmax, vbool<N>& nearPlane)
 {
   const vfloat<N> np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   const vfloat<N> np = (np0 + np1) + np2;
   const vfloat<N> sum = (Abs(np0) + Abs(np1)) + Abs(np2);
-  inexact = sum > vfloat<N>(16.0f) * Abs(np);
-  // Read only where inexact: no division in the common case.
-  sumOverNd = Any(inexact) ? vfloat<N>(0x1.0p-20f) * sum / Abs(nd) : vfloat<N>(0.0f);
-  return np / nd;
+  const vfloat<N> t = np / nd;
+  const vfloat<N> an = Abs(nd), tn = t * an;
+  const vfloat<N> slack = vfloat<N>(0.25f) * Abs(tn) + vfloat<N>(0x1.0p-20f) * sum;
+  nearPlane = (sum > vfloat<N>(16.0f) * Abs(np)) & (tn + slack >= tmin * an) & (tn - slack <= tmax * an);
+  return t;
 }
 
 // The distance along the ray to the triangle's plane, kernels/intersect.h's
@@ -63,7 +67,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
                                           const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss,
-                                          vbool<N>& inexact, vfloat<N>& sumOverNd)
+                                          vfloat<N> tmin, vfloat<N> tmax, vbool<N>& nearPlane)
 {
   vfloat<N> e0[3], e1[3], e2[3];
   for (int i = 0; i < 3; ++i) {
@@ -89,7 +93,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   n[2] = ea[0] * eb[1] - ea[1] * eb[0];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, inexact, sumOverNd);
+  return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
@@ -98,7 +102,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
 // simd/CMakeLists.txt), which gives every lane Triangle_PlaneTN's bits.
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> org[3], const vfloat<N> dir[3],
-                                           vbool<N>& miss, vbool<N>& inexact, vfloat<N>& sumOverNd)
+                                           vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax, vbool<N>& nearPlane)
 {
   float nf[3];
   const int shared = Triangle_PlaneNormal(&tri, nf);
@@ -108,10 +112,10 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
   for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
   const vfloat<N> nd = Dot3N<N>(n, dir);
   miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, inexact, sumOverNd);
+  return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
 }
 
-// Plane sources for Triangle_WatertightN: T(org, dir, miss, inexact) gives
+// Plane sources for Triangle_WatertightN: T(org, dir, miss, tmin, tmax, nearPlane) gives
 // the distance to the triangle's plane, Tri(l) lane l's triangle (for the
 // double-float cold path). Vertices already in registers (a transposed
 // group), a TrianglePack's [vertex][axis][lane] floats, or one triangle for
@@ -119,9 +123,10 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
 template <int N>
 struct VecPlane {
   const vfloat<N> (&vtx)[3][4];
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax,
+              vbool<N>& nearPlane) const
   {
-    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss, inexact, son);
+    return Triangle_PlaneTN<N>(vtx[0], vtx[1], vtx[2], org, dir, miss, tmin, tmax, nearPlane);
   }
   // Lanes whose triangle has long edges (the flags word rides in v0's
   // fourth float).
@@ -143,7 +148,8 @@ template <int N>
 struct PackPlane {
   const float (&pv)[3][3][N];
   const std::uint32_t (&flags)[N];
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax,
+              vbool<N>& nearPlane) const
   {
     vfloat<N> v0[3], v1[3], v2[3];
     for (int i = 0; i < 3; ++i) {
@@ -151,7 +157,7 @@ struct PackPlane {
       v1[i] = vfloat<N>::Load(pv[1][i]);
       v2[i] = vfloat<N>::Load(pv[2][i]);
     }
-    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, inexact, son);
+    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, tmin, tmax, nearPlane);
   }
   unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
   unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vint<N>::Load(flags), bit); }
@@ -170,9 +176,10 @@ struct PackPlane {
 template <int N>
 struct OnePlane {
   const Triangle& tri;
-  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vbool<N>& inexact, vfloat<N>& son) const
+  vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax,
+              vbool<N>& nearPlane) const
   {
-    return Triangle_PlaneT1N<N>(tri, org, dir, miss, inexact, son);
+    return Triangle_PlaneT1N<N>(tri, org, dir, miss, tmin, tmax, nearPlane);
   }
   unsigned LongEdgeLanes() const { return tri.flags & CR_TRI_LONG_EDGES ? (1u << N) - 1u : 0u; }
   unsigned FlagLanes(std::uint32_t bit) const { return tri.flags & bit ? (1u << N) - 1u : 0u; }
@@ -262,7 +269,7 @@ __attribute__((noinline, cold)) NearPlaneLanes<N> Triangle_NearPlaneLanesN(unsig
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
 // translation: A[j], B[j], C[j] are the vertices minus the ray origin in the
 // ray's permuted axes (j = 0, 1, 2 for kx, ky, kz); s[] = sx, sy, sz.
-// plane.T(org, dir, miss, inexact) gives the distance to the triangle's plane
+// plane.T(org, dir, miss, tmin, tmax, nearPlane) gives the distance to the triangle's plane
 // (Triangle_PlaneTN; the plane sources above); it runs only when some lane
 // passes the edge tests (most tests miss before), so the world-order
 // vertices are not loaded or kept in registers for the others.
@@ -318,14 +325,9 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   // Only lanes whose t may lie in range need either: elsewhere the float t
   // is out of range too, and the lane misses whatever the edges say (a
   // shadow ray leaving a face, t just behind its origin, stays here).
-  vbool<N> inexact;
-  vfloat<N> sumOverNd;
-  vfloat<N> t = plane.T(org, dir, miss, inexact, sumOverNd);
-  vbool<N> nearPlane = AndNot(inexact, miss);
-  if (Any(nearPlane)) {
-    const vfloat<N> slack = vfloat<N>(0.25f) * Abs(t) + sumOverNd;
-    nearPlane = nearPlane & (t + slack >= tmin) & (t - slack <= tmax);
-  }
+  vbool<N> nearPlane;
+  vfloat<N> t = plane.T(org, dir, miss, tmin, tmax, nearPlane);
+  nearPlane = AndNot(nearPlane, miss);
   if (Any(nearPlane)) {
     const NearPlaneLanes<N> r = Triangle_NearPlaneLanesN<N>(nearPlane.Bits(), plane, org, dir, U, V, W, t, miss);
     U = r.U;
