@@ -258,8 +258,8 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) {
     /* The origin near the triangle's plane relative to the shared vertex's
      * distance, and t may lie in [tmin, tmax] (elsewhere the float t is out
-     * of range too, and the test misses whatever the edges say). A float hit whose three edge functions all lie within their
-     * rounding then may be a small triangle seen edge-on from far away, its
+     * of range too, and the test misses whatever the edges say). A float
+     * hit whose three edge functions all lie within their rounding then may be a small triangle seen edge-on from far away, its
      * projection degenerate (two can round to 0 and the third not: an
      * "inside" at the plane's crossing, far from the triangle): the three
      * edges again in double-float. Only then: a rule that fired on one edge

@@ -218,7 +218,6 @@ CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>&
     ray.sx = s[0][l];
     ray.sy = s[1][l];
     ray.sz = s[2][l];
-    ray.anyHit = P.anyHit ? 1 : 0;
     ray.kx = static_cast<int>(k[0][l]);
     ray.ky = static_cast<int>(k[1][l]);
     ray.kz = static_cast<int>(k[2][l]);

@@ -110,7 +110,7 @@ struct PackRay {
   vfloat<K> tmin;
   vfloat<K> dd;  // d.d, for the sphere test
   int k[3];
-  bool anyHit = false;  // Ray::anyHit
+  bool anyHit = false;  // Ray::anyHit; set by the walk that knows the query
 };
 
 template <int K>
@@ -129,7 +129,6 @@ CR_SIMD_INLINE void PackRay_Init(PackRay<K>& pr, const Ray& r)
   pr.s[2] = vfloat<K>(r.sz);
   pr.tmin = vfloat<K>(r.tmin);
   pr.dd = Dot3N<K>(pr.dir, pr.dir);
-  pr.anyHit = r.anyHit != 0;
 }
 
 }  // namespace cr::simd::CR_SIMD_NS
