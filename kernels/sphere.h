@@ -139,6 +139,11 @@ CR_COLD CR_FUNC int Sphere_IntersectDf(const real org[3], const real dir[3], con
   const Df bh = Df_Dot3F(f, dir);
   const Df r2 = Df_ProdF(s->radius, s->radius);
   const Df c = Df_Sub(Df_Dot3(f, f), r2);
+  /* An origin outside the sphere moving away from it (c > 0, bh > 0: a ray
+   * leaving the surface, the commonest reason to be here) has both roots
+   * negative: q = -(bh + sq) < 0, q / a < 0 and c / q < 0, each at least
+   * 2^-101 from 0 by the margins below (no quotient underflows to -0). */
+  if (tmin >= 0.0f && bh.hi > 0x1.0p-100f * a.hi && c.hi > 0x1.0p-100f * bh.hi) return 0;
   Df x[3];
   x[0] = Df_Sub(Df_MulF(f[1], dir[2]), Df_MulF(f[2], dir[1]));
   x[1] = Df_Sub(Df_MulF(f[2], dir[0]), Df_MulF(f[0], dir[2]));
@@ -156,6 +161,27 @@ CR_COLD CR_FUNC int Sphere_IntersectDf(const real org[3], const real dir[3], con
     return 1;
   }
   return 0;
+}
+
+/* Sphere_IntersectDf for a ray whose float discriminant is undecided
+ * (Sphere_DiscUndecided): most such rays pass the sphere by more than the
+ * error of the discriminant recomputed from the exact o - c and exact
+ * products (Sphere_DiscOfExactF), and are certain misses without the
+ * double-float test. That error, to first order (u = 2^-24): ar2 = a r^2 in
+ * float by 5u; each cross-product component by 2u |cx| + 5u^2 |f| |d| (the
+ * exact products' sum and the fl terms, each rounded); their squares' sum
+ * by 7u cc; so below 8u (ar2 + cc) + 9u^2 (cc + |f|^2 |d|^2) (the cross
+ * term, with 2 xy <= x^2 + y^2). Taken as 2^-20 (ar2 + cc) + 2^-13 Q
+ * (Q = 2^-29 |f|^2 |d|^2: 64u^2 against 9u^2), with cc from the
+ * recomputed disc. NaN and overflow fall through to double-float. */
+CR_COLD CR_FUNC int Sphere_IntersectUndecided(const real org[3], const real dir[3], const Sphere* s, real tmin,
+                                              real tmax, real ar2, real Q, real* tHit)
+{
+  real fh[3], fl[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) fh[i] = Ef_TwoSum(org[i], -s->center[i], &fl[i]);
+  const real de = Sphere_DiscOfExactF(fh, fl, dir, ar2);
+  if (de < -(0x1.0p-20f * (ar2 + (ar2 - de)) + 0x1.0p-13f * Q)) return 0;
+  return Sphere_IntersectDf(org, dir, s, tmin, tmax, tHit);
 }
 
 #endif
@@ -192,7 +218,7 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   const real Q = 0x1.0p-29f * (ff * a);
   if (disc < -0x1.0p15f * Q) return 0;
   /* Hit or miss not decided by float: double-float from the exact o - c. */
-  if (Sphere_DiscUndecided(disc, Q, cc)) return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
+  if (Sphere_DiscUndecided(disc, Q, cc)) return Sphere_IntersectUndecided(r->org, r->dir, s, tmin, tmax, ar2, Q, tHit);
 #endif
   if (disc < (real)0.0f) return 0;
   real q;

@@ -67,7 +67,8 @@ CR_SIMD_INLINE vbool<N> Box_HitN(const vfloat<N> org[3], const vfloat<N> dir[3],
 template <>
 struct SimdTest<Box> {
   template <int N, bool kFast>
-  CR_SIMD_INLINE static vbool<N> Packet(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P, vfloat<N> tmax,
+  CR_SIMD_INLINE static vbool<N> Packet(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P, vbool<N>,
+                                        vfloat<N> tmax,
                                         vfloat<N>& t, vfloat<N>&, vfloat<N>&)
   {
     const Box& b = PrimData<Box>(sc)[Prim_Local(&sc.ranges, CR_PRIM_BOX, g)];

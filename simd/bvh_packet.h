@@ -45,7 +45,7 @@ CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint3
 {
   vfloat<N> t, u(0.0f), v(0.0f);
   const PrimRanges& c = sc.ranges;
-  const vbool<N> ok = SimdTest<T>::template Packet<N, kFast>(sc, g, P, H.t, t, u, v);
+  const vbool<N> ok = SimdTest<T>::template Packet<N, kFast>(sc, g, P, m, H.t, t, u, v);
   const vint<N> gv(static_cast<int>(g));
   const vbool<N> found = m & ok;
   vbool<N> closer = found & (t < H.t);

@@ -101,7 +101,10 @@ CR_SIMD_INLINE void Quadratic_RootsN(vfloat<N> a, vfloat<N> bh, vfloat<N> c, vfl
   const vfloat<N> sq = CopySign(Sqrt(disc), bh);
   q = -(bh + sq);
   const vfloat<N> r0 = q / a;
-  const vfloat<N> r1 = Select(vfloat<N>(16.0f) * q * q >= a * cScale, c / q, (sq - bh) / a);
+  // Select(stable, c / q, (sq - bh) / a) with one division: the lane's
+  // quotient is the same either way.
+  const vbool<N> stable = vfloat<N>(16.0f) * q * q >= a * cScale;
+  const vfloat<N> r1 = Select(stable, c, sq - bh) / Select(stable, q, a);
   t0 = FMin(r0, r1);
   t1 = FMax(r0, r1);
 }

@@ -277,7 +277,7 @@ template <int N, class PlaneFn>
 CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<N> B[3], const vfloat<N> C[3],
                                              const vfloat<N> s[3], PlaneFn&& plane, const vfloat<N> org[3],
                                              const vfloat<N> dir[3], vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
-                                             vfloat<N>& uHit, vfloat<N>& vHit)
+                                             vfloat<N>& uHit, vfloat<N>& vHit, vbool<N> lanes)
 {
   const vfloat<N> Ax = A[0] - s[0] * A[2], Ay = A[1] - s[1] * A[2];
   const vfloat<N> Bx = B[0] - s[0] * B[2], By = B[1] - s[1] * B[2];
@@ -293,9 +293,10 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
     const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
     const vfloat<N> k(0x1.0p-18f);
-    const unsigned undecided = (plane.FlagLanes(CR_TRI_LONG_U) & (Abs(U) <= k * (nB * nC)).Bits()) |
-                               (plane.FlagLanes(CR_TRI_LONG_V) & (Abs(V) <= k * (nC * nA)).Bits()) |
-                               (plane.FlagLanes(CR_TRI_LONG_W) & (Abs(W) <= k * (nA * nB)).Bits());
+    const unsigned undecided = ((plane.FlagLanes(CR_TRI_LONG_U) & (Abs(U) <= k * (nB * nC)).Bits()) |
+                                (plane.FlagLanes(CR_TRI_LONG_V) & (Abs(V) <= k * (nC * nA)).Bits()) |
+                                (plane.FlagLanes(CR_TRI_LONG_W) & (Abs(W) <= k * (nA * nB)).Bits())) &
+                               lanes.Bits();
     if (undecided) {
       const EdgeFunctions<N> e = Triangle_EdgeLanesN<N>(
           undecided, plane, org, dir, U, V, W,
@@ -308,7 +309,7 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     }
   }
   const vfloat<N> zero(0.0f);
-  vbool<N> miss = ((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero));
+  vbool<N> miss = (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero))) | !lanes;
   vfloat<N> det = U + V + W;
   miss = miss | (det == zero);
   // Most tests miss here: skip the division when all do.
@@ -384,7 +385,8 @@ CR_SIMD_INLINE vbool<N> Triangle_MollerTrumboreN(const vfloat<N> v0[3], const vf
 template <>
 struct SimdTest<Triangle> {
   template <int N, bool kFast>
-  CR_SIMD_INLINE static vbool<N> Packet(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P, vfloat<N> tmax,
+  CR_SIMD_INLINE static vbool<N> Packet(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P, vbool<N> m,
+                                        vfloat<N> tmax,
                                         vfloat<N>& t, vfloat<N>& u, vfloat<N>& v)
   {
     const Triangle& tri = PrimData<Triangle>(sc)[Prim_Local(&sc.ranges, CR_PRIM_TRIANGLE, g)];
@@ -413,11 +415,11 @@ struct SimdTest<Triangle> {
           C[j] = PermuteXYZ(tri.v2, P.sel[j]) - P.orgK[j];
         }
       }
-      return Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>{tri}, P.org, P.dir, P.tmin, tmax, t, u, v);
+      return Triangle_WatertightN<N>(A, B, C, P.s, OnePlane<N>{tri}, P.org, P.dir, P.tmin, tmax, t, u, v, m);
     }
   }
   template <int K, bool kFast>
-  CR_SIMD_INLINE static vbool<K> Pack(const KernelScene&, const TrianglePack<K>& pk, vbool<K>, const PackRay<K>& pr,
+  CR_SIMD_INLINE static vbool<K> Pack(const KernelScene&, const TrianglePack<K>& pk, vbool<K> valid, const PackRay<K>& pr,
                                       vfloat<K> tmax, vfloat<K>& t, vfloat<K>& u, vfloat<K>& v)
   {
     if constexpr (kFast) {
@@ -436,7 +438,7 @@ struct SimdTest<Triangle> {
         C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
       }
       return Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u,
-                                     v);
+                                     v, valid);
     }
   }
   // Each vertex is a 16-byte row (x, y, z, flags or pad).
@@ -463,7 +465,7 @@ struct SimdTest<Triangle> {
         B[j] = vtx[1][pr.k[j]] - pr.orgK[j];
         C[j] = vtx[2][pr.k[j]] - pr.orgK[j];
       }
-      return Triangle_WatertightN<4>(A, B, C, pr.s, VecPlane<4>{vtx}, pr.org, pr.dir, pr.tmin, tmax, t, u, v);
+      return Triangle_WatertightN<4>(A, B, C, pr.s, VecPlane<4>{vtx}, pr.org, pr.dir, pr.tmin, tmax, t, u, v, vbool<4>(true));
     }
   }
 };
