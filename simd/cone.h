@@ -189,35 +189,6 @@ CR_SIMD_INLINE vbool<N> Cone_UndecidedN(const ConeTerms<N>& T, vbool<N> skip)
   return AndNot((T.disc < vfloat<N>(0.0f)) & (-T.disc <= vfloat<N>(0x1.0p-20f) * (T.ee + T.xx)), skip);
 }
 
-// The lanes of `flagged` (undecided, or flagged by Cone_InaccurateN) through
-// Cone_NeedsDf's windows, and those it keeps through the scalar kernels'
-// double-float test. Out of line: its terms are recomputed here (the same
-// operations, the same bits) rather than kept live across the hot test.
-template <int N, class ConeOf>
-__attribute__((noinline, cold)) RefinedLanes<N> Cone_RefineN(ConeLanes<N> c, const vfloat<N> org[3],
-                                                             const vfloat<N> dir[3], unsigned flagged,
-                                                             vfloat<N> tHit, vbool<N> ok, bool anyHit, ConeOf coneOf)
-{
-  const ConeTerms<N> T = Cone_TermsN<false, N>(c, dir);
-  const vbool<N> skip = (!(c.H > vfloat<N>(0.0f))) | T.linear;
-  const vbool<N> undecided = Cone_UndecidedN<N>(T, skip);
-  vfloat<N> t0, t1, q;
-  Quadratic_RootsN<N>(T.A, T.Bh, T.C, T.oo + T.rb * T.rb, T.disc, t0, t1, q);
-  const vbool<N> needs = Cone_NeedsDfN<N>(T.C, T.oo + T.rb * T.rb, T.Bh, T.disc, T.ee, T.xx, q, Dot3N<N>(c.dl, c.dl),
-                                          T.oo, c.k, T.ds, T.rb, Dot3N<N>(dir, dir), T.A, t0, t1, c.tmin, c.tmax, T.os,
-                                          c.H, skip | (T.disc < vfloat<N>(0.0f)), anyHit);
-  const unsigned bits = flagged & (needs | undecided).Bits();
-  if (!bits) return {tHit, ok};
-  return RefineLanesN<N>(bits, [=](int l, float* th) {
-    const Cone* cn = coneOf(l);
-    if (!cn) return false;
-    float o[3], d[3];
-    Lane3<N>(org, l, o);
-    Lane3<N>(dir, l, d);
-    return Cone_IntersectDf(o, d, cn, c.tmin[l], c.tmax[l], th) != 0;
-  }, tHit, ok);
-}
-
 // Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
 // dl = org - base. coneOf(l) is lane l's cone as the scene holds it (nullptr
 // for a lane that holds none), for the double-float cold path
@@ -251,11 +222,11 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
       return vbool<N>(false);
     }
     vfloat<N> q;
-    Quadratic_RootsN<N>(T.A, T.Bh, T.C, T.oo + T.rb * T.rb, T.disc, t0, t1, q);
-    // Cone_NeedsDfN's first rule only; its windows run out of line, in
-    // Cone_RefineN, for the lanes it flags, so few values stay live here.
-    refine = undecided | Cone_InaccurateN<N>(T.C, T.oo + T.rb * T.rb, T.Bh, T.disc, T.ee + T.xx,
-                                             Dot3N<N>(dl, dl), T.oo, miss | linear | quadMiss);
+    const vfloat<N> cScale = T.oo + T.rb * T.rb, dl2 = Dot3N<N>(dl, dl);
+    Quadratic_RootsN<N>(T.A, T.Bh, T.C, cScale, T.disc, t0, t1, q);
+    refine = undecided | Cone_NeedsDfN<N>(T.C, cScale, T.Bh, T.disc, T.ee, T.xx, q, dl2, T.oo, k, T.ds, T.rb,
+                                          Dot3N<N>(dir, dir), T.A, t0, t1, tmin, tmax, T.os, H,
+                                          miss | linear | quadMiss, anyHit);
   }
   // The linear root, past the early exit above (most tests end there, and
   // a division left before it stalls every one of them).
@@ -273,7 +244,14 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
   vbool<N> ok = AndNot(ok0 | ok1, miss);
   if constexpr (!kFast) {
     if (Any(refine)) {
-      const RefinedLanes<N> r = Cone_RefineN<N>(c, org, dir, refine.Bits(), tHit, ok, anyHit, coneOf);
+      const RefinedLanes<N> r = RefineLanesN<N>(refine.Bits(), [=](int l, float* th) {
+        const Cone* cn = coneOf(l);
+        if (!cn) return false;
+        float o[3], d[3];
+        Lane3<N>(org, l, o);
+        Lane3<N>(dir, l, d);
+        return Cone_IntersectDf(o, d, cn, tmin[l], tmax[l], th) != 0;
+      }, tHit, ok);
       tHit = r.t;
       ok = r.ok;
     }
