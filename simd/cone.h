@@ -78,19 +78,6 @@ struct SimdPrim<Cone> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// Cone_NeedsDf's first rule (kernels/cone.h): the lanes not in `skip` where
-// float may be off at all (the origin near the surface, a discriminant that
-// cancels, an origin far from the axis's base along it).
-template <int N>
-CR_SIMD_INLINE vbool<N> Cone_InaccurateN(vfloat<N> C, vfloat<N> cScale, vfloat<N> Bh, vfloat<N> disc,
-                                         vfloat<N> dScale, vfloat<N> dl2, vfloat<N> oo, vbool<N> skip)
-{
-  const vfloat<N> d2 = disc * (Bh * Bh + disc);
-  return AndNot((cScale > vfloat<N>(8.0f) * Abs(C)) | (dScale * dScale > vfloat<N>(64.0f) * d2) |
-                    (dl2 > vfloat<N>(64.0f) * oo),
-                skip);
-}
-
 // Cone_NeedsDf of kernels/cone.h, lane by lane, for the lanes not in `skip`
 // (misses and the linear case, which the scalar test never asks about; a
 // missing lane, disc < 0, would pass the cancellation rule and cost the
@@ -105,7 +92,8 @@ CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> B
   const vfloat<N> dScale = ee + xx;
   const vfloat<N> d2 = disc * (Bh * Bh + disc);
   const vfloat<N> ds2 = dScale * dScale;
-  const vbool<N> inaccurate = Cone_InaccurateN<N>(C, cScale, Bh, disc, dScale, dl2, oo, skip);
+  const vbool<N> inaccurate = AndNot(
+      (cScale > vfloat<N>(8.0f) * Abs(C)) | (ds2 > vfloat<N>(64.0f) * d2) | (dl2 > vfloat<N>(64.0f) * oo), skip);
   if (None(inaccurate)) return inaccurate;
   const vfloat<N> ndl = Sqrt(dl2), nd = Sqrt(dd), noR = Sqrt(oo), kds = Abs(k * ds), ak = Abs(k), arb = Abs(rb);
   const vfloat<N> Ee = vfloat<N>(0x1.0p-20f) * ((ak * ndl + vfloat<N>(2.0f) * arb) * nd + kds * ndl);
@@ -135,60 +123,6 @@ CR_SIMD_INLINE vbool<N> Cone_NeedsDfN(vfloat<N> C, vfloat<N> cScale, vfloat<N> B
   return inaccurate & (always | window);
 }
 
-// The cone of lanes as Cone_IntersectN receives it (dl = org - base, the
-// unit axis w, H, r0, k) and the ray interval.
-template <int N>
-struct ConeLanes {
-  vfloat<N> dl[3], w[3];
-  vfloat<N> H, r0, k, tmin, tmax;
-};
-
-// Cone_Intersect's terms up to its discriminant, in its order (robust form:
-// disc = |e|^2 - |x|^2, e = rb dR - k ds oR, x = oR x dR).
-template <int N>
-struct ConeTerms {
-  vfloat<N> ds, os, rb, A, Bh, oo, C, ee, xx, disc;
-  vbool<N> linear;
-};
-template <bool kFast, int N>
-CR_SIMD_INLINE ConeTerms<N> Cone_TermsN(const ConeLanes<N>& c, const vfloat<N> dir[3])
-{
-  ConeTerms<N> T;
-  T.ds = Dot3N<N>(dir, c.w);
-  T.os = Dot3N<N>(c.dl, c.w);
-  vfloat<N> dR[3], oR[3];
-  for (int i = 0; i < 3; ++i) {
-    dR[i] = dir[i] - T.ds * c.w[i];
-    oR[i] = c.dl[i] - T.os * c.w[i];
-  }
-  T.rb = c.r0 + c.k * T.os;
-  T.A = Dot3N<N>(dR, dR) - c.k * c.k * T.ds * T.ds;
-  T.Bh = Dot3N<N>(oR, dR) - c.k * T.ds * T.rb;
-  T.oo = Dot3N<N>(oR, oR);
-  T.C = T.oo - T.rb * T.rb;
-  // A == 0: the linear case.
-  T.linear = T.A == vfloat<N>(0.0f);
-  if constexpr (!kFast) {
-    vfloat<N> e[3], x[3];
-    for (int i = 0; i < 3; ++i) e[i] = T.rb * dR[i] - c.k * T.ds * oR[i];
-    x[0] = oR[1] * dR[2] - oR[2] * dR[1];
-    x[1] = oR[2] * dR[0] - oR[0] * dR[2];
-    x[2] = oR[0] * dR[1] - oR[1] * dR[0];
-    T.ee = Dot3N<N>(e, e);
-    T.xx = Dot3N<N>(x, x);
-    T.disc = T.ee - T.xx;
-  }
-  return T;
-}
-
-// Robust mode's quadratic lanes whose discriminant lies within its rounding
-// of 0 (decided in double-float), among those not in `skip`.
-template <int N>
-CR_SIMD_INLINE vbool<N> Cone_UndecidedN(const ConeTerms<N>& T, vbool<N> skip)
-{
-  return AndNot((T.disc < vfloat<N>(0.0f)) & (-T.disc <= vfloat<N>(0x1.0p-20f) * (T.ee + T.xx)), skip);
-}
-
 // Cone_Intersect with the per-cone terms of ConeData (w unit axis, H, r0, k).
 // dl = org - base. coneOf(l) is lane l's cone as the scene holds it (nullptr
 // for a lane that holds none), for the double-float cold path
@@ -199,45 +133,63 @@ CR_SIMD_INLINE vbool<N> Cone_IntersectN(const vfloat<N> org[3], const vfloat<N> 
                                         vfloat<N> tmax, vfloat<N>& tHit, bool anyHit, vbool<N> lanes, ConeOf&& coneOf)
 {
   const vfloat<N> zero(0.0f);
-  const ConeLanes<N> c{{dl[0], dl[1], dl[2]}, {w[0], w[1], w[2]}, H, r0, k, tmin, tmax};
-  const ConeTerms<N> T = Cone_TermsN<kFast, N>(c, dir);
-  const vbool<N> linear = T.linear;
   vbool<N> miss = (!(H > zero)) | !lanes;
+  const vfloat<N> ds = Dot3N<N>(dir, w);
+  const vfloat<N> os = Dot3N<N>(dl, w);
+  vfloat<N> dR[3], oR[3];
+  for (int i = 0; i < 3; ++i) {
+    dR[i] = dir[i] - ds * w[i];
+    oR[i] = dl[i] - os * w[i];
+  }
+  const vfloat<N> rb = r0 + k * os;
+  const vfloat<N> A = Dot3N<N>(dR, dR) - k * k * ds * ds;
+  const vfloat<N> Bh = Dot3N<N>(oR, dR) - k * ds * rb;
+  const vfloat<N> oo = Dot3N<N>(oR, oR);
+  const vfloat<N> C = oo - rb * rb;
+  // A == 0: the linear case.
+  const vbool<N> linear = A == zero;
   vfloat<N> t0, t1;
   vbool<N> quadMiss, refine(false);
   if constexpr (kFast) {
-    const vfloat<N> disc4 = vfloat<N>(4.0f) * T.Bh * T.Bh - vfloat<N>(4.0f) * T.A * T.C;
+    const vfloat<N> disc4 = vfloat<N>(4.0f) * Bh * Bh - vfloat<N>(4.0f) * A * C;
     quadMiss = disc4 < zero;
     const vfloat<N> sq = Sqrt(disc4);
-    const vfloat<N> ta = (vfloat<N>(-2.0f) * T.Bh - sq) / (vfloat<N>(2.0f) * T.A);
-    const vfloat<N> tb = (vfloat<N>(-2.0f) * T.Bh + sq) / (vfloat<N>(2.0f) * T.A);
+    const vfloat<N> ta = (vfloat<N>(-2.0f) * Bh - sq) / (vfloat<N>(2.0f) * A);
+    const vfloat<N> tb = (vfloat<N>(-2.0f) * Bh + sq) / (vfloat<N>(2.0f) * A);
     t0 = FMin(ta, tb);
     t1 = FMax(ta, tb);
   } else {
-    quadMiss = T.disc < zero;
-    const vbool<N> undecided = Cone_UndecidedN<N>(T, miss | linear);
+    vfloat<N> e[3], x[3];
+    for (int i = 0; i < 3; ++i) e[i] = rb * dR[i] - k * ds * oR[i];
+    x[0] = oR[1] * dR[2] - oR[2] * dR[1];
+    x[1] = oR[2] * dR[0] - oR[0] * dR[2];
+    x[2] = oR[0] * dR[1] - oR[1] * dR[0];
+    const vfloat<N> ee = Dot3N<N>(e, e), xx = Dot3N<N>(x, x);
+    const vfloat<N> disc = ee - xx;
+    quadMiss = disc < zero;
+    // A discriminant within its rounding of 0: decided in double-float.
+    const vbool<N> undecided = AndNot(quadMiss & (-disc <= vfloat<N>(0x1.0p-20f) * (ee + xx)), miss | linear);
     // Skip the square root and divisions when every lane misses already.
-    if (None(undecided) && All(miss | (linear & (T.Bh == zero)) | AndNot(quadMiss, linear))) {
+    if (None(undecided) && All(miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear))) {
       tHit = zero;
       return vbool<N>(false);
     }
     vfloat<N> q;
-    const vfloat<N> cScale = T.oo + T.rb * T.rb, dl2 = Dot3N<N>(dl, dl);
-    Quadratic_RootsN<N>(T.A, T.Bh, T.C, cScale, T.disc, t0, t1, q);
-    refine = undecided | Cone_NeedsDfN<N>(T.C, cScale, T.Bh, T.disc, T.ee, T.xx, q, dl2, T.oo, k, T.ds, T.rb,
-                                          Dot3N<N>(dir, dir), T.A, t0, t1, tmin, tmax, T.os, H,
-                                          miss | linear | quadMiss, anyHit);
+    Quadratic_RootsN<N>(A, Bh, C, oo + rb * rb, disc, t0, t1, q);
+    refine = Cone_NeedsDfN<N>(C, oo + rb * rb, Bh, disc, ee, xx, q, Dot3N<N>(dl, dl), oo, k, ds, rb,
+                              Dot3N<N>(dir, dir), A, t0, t1, tmin, tmax, os, H, miss | linear | quadMiss, anyHit) |
+             undecided;
   }
   // The linear root, past the early exit above (most tests end there, and
   // a division left before it stalls every one of them).
   if (Any(linear)) {
-    const vfloat<N> tLin = -T.C / (vfloat<N>(2.0f) * T.Bh);
+    const vfloat<N> tLin = -C / (vfloat<N>(2.0f) * Bh);
     t0 = Select(linear, tLin, t0);
     t1 = Select(linear, tLin, t1);
   }
-  miss = miss | (linear & (T.Bh == zero)) | AndNot(quadMiss, linear);
-  const vfloat<N> s0 = T.os + t0 * T.ds;
-  const vfloat<N> s1 = T.os + t1 * T.ds;
+  miss = miss | (linear & (Bh == zero)) | AndNot(quadMiss, linear);
+  const vfloat<N> s0 = os + t0 * ds;
+  const vfloat<N> s1 = os + t1 * ds;
   const vbool<N> ok0 = (t0 >= tmin) & (t0 <= tmax) & (s0 >= zero) & (s0 <= H);
   const vbool<N> ok1 = (t1 >= tmin) & (t1 <= tmax) & (s1 >= zero) & (s1 <= H);
   tHit = Select(ok0, t0, t1);
@@ -288,7 +240,8 @@ struct SimdTest<Cone> {
       w[i] = vfloat<K>::Load(pk.w[i]);
     }
     return Cone_IntersectN<kFast, K>(pr.org, dl, pr.dir, w, vfloat<K>::Load(pk.H), vfloat<K>::Load(pk.r0),
-                                     vfloat<K>::Load(pk.k), pr.tmin, tmax, t, pr.anyHit, valid, [&sc, &pk, bits = valid.Bits()](int l) {
+                                     vfloat<K>::Load(pk.k), pr.tmin, tmax, t, pr.anyHit, valid,
+                                     [&sc, &pk, bits = valid.Bits()](int l) {
                                        return bits >> l & 1u
                                                   ? &ScenePrims<Cone>(sc)[Prim_Local(&sc.ranges, CR_PRIM_CONE, pk.g[l])]
                                                   : nullptr;

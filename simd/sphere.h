@@ -35,16 +35,6 @@ struct SimdPrim<Sphere> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// Sphere_NeedsDf's first rule (kernels/sphere.h): the lanes not in `miss`
-// whose float roots may be off at all (c or the discriminant cancels).
-template <int N>
-CR_SIMD_INLINE vbool<N> Sphere_InaccurateN(vfloat<N> c, vfloat<N> cScale, vfloat<N> bh, vfloat<N> disc,
-                                           vfloat<N> dScale, vbool<N> miss)
-{
-  const vfloat<N> dd = disc * (bh * bh + disc);
-  return AndNot((cScale > vfloat<N>(8.0f) * Abs(c)) | (dScale * dScale > vfloat<N>(64.0f) * dd), miss);
-}
-
 // Sphere_NeedsDf of kernels/sphere.h, lane by lane, for the lanes not in
 // `miss` (the scalar test returns before it on a miss; here a missing lane,
 // disc < 0, would pass the cancellation rule and cost the windows of the
@@ -55,10 +45,12 @@ CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N>
                                         vfloat<N> t0, vfloat<N> t1, vfloat<N> tmin, vfloat<N> tmax, vbool<N> miss,
                                         bool anyHit)
 {
-  const vbool<N> inaccurate = Sphere_InaccurateN<N>(c, cScale, bh, disc, dScale, miss);
-  if (None(inaccurate)) return inaccurate;
   const vfloat<N> dd = disc * (bh * bh + disc);
-  const vbool<N> always = (dScale * dScale > vfloat<N>(0x1.0p36f) * dd) | !(disc > vfloat<N>(0.0f));
+  const vfloat<N> ds2 = dScale * dScale;
+  const vbool<N> inaccurate =
+      AndNot((cScale > vfloat<N>(8.0f) * Abs(c)) | (ds2 > vfloat<N>(64.0f) * dd), miss);
+  if (None(inaccurate)) return inaccurate;
+  const vbool<N> always = (ds2 > vfloat<N>(0x1.0p36f) * dd) | !(disc > vfloat<N>(0.0f));
   const vfloat<N> af = a * ff;
   const vfloat<N> eq = vfloat<N>(0x1.0p-20f) * ((Sqrt(af * cc) + dScale) / Sqrt(disc) + Sqrt(af));
   const vfloat<N> rel = eq / Abs(q) + vfloat<N>(0x1.0p-20f);
@@ -71,57 +63,25 @@ CR_SIMD_INLINE vbool<N> Sphere_NeedsDfN(vfloat<N> c, vfloat<N> cScale, vfloat<N>
   return inaccurate & (always | window);
 }
 
-// Sphere_Intersect's robust terms, in its order: f = org - cen, bh = f.d,
-// ff = f.f, c = ff - r^2, the cross product's cc = |f x d|^2, ar2 = a r^2,
-// disc = ar2 - cc and its bound's Q = 2^-29 ff a.
-template <int N>
-struct SphereTerms {
-  vfloat<N> bh, ff, c, cc, ar2, disc, Q;
-};
-template <int N>
-CR_SIMD_INLINE SphereTerms<N> Sphere_TermsN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
-                                            vfloat<N> a, vfloat<N> rad)
-{
-  SphereTerms<N> T;
-  vfloat<N> f[3];
-  for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
-  T.bh = Dot3N<N>(f, dir);
-  T.ff = Dot3N<N>(f, f);
-  T.c = T.ff - rad * rad;
-  const vfloat<N> cx = f[1] * dir[2] - f[2] * dir[1];
-  const vfloat<N> cy = f[2] * dir[0] - f[0] * dir[2];
-  const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
-  T.ar2 = a * rad * rad;
-  T.cc = cx * cx + cy * cy + cz * cz;
-  T.disc = T.ar2 - T.cc;
-  T.Q = vfloat<N>(0x1.0p-29f) * (T.ff * a);
-  return T;
-}
-
-// Sphere_DiscUndecided, lane by lane.
-template <int N>
-CR_SIMD_INLINE vbool<N> Sphere_UndecidedN(const SphereTerms<N>& T)
-{
-  return T.disc * T.disc <= T.Q * (T.cc + vfloat<N>(0x1.0p-9f) * T.Q);
-}
-
 // Sphere_Intersect: nearest root in [tmin, tmax]; f = org - cen; a = d.d
 // (Dot3N(dir, dir), computed once per ray by the caller). Where the float
 // discriminant is within its error bound (Sphere_DiscUndecided) or the roots
 // may be off (Sphere_NeedsDf), the lane takes the scalar kernels' cold
-// tests (Sphere_RefineN).
+// tests (Sphere_IntersectUndecided, Sphere_IntersectDf). Only the lanes in
+// `lanes` (those the traversal asks) take them.
 template <bool kFast, int N>
 CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N> cen[3], const vfloat<N> dir[3],
                                           vfloat<N> a, vfloat<N> rad, vfloat<N> tmin, vfloat<N> tmax, vfloat<N>& tHit,
                                           bool anyHit, vbool<N> lanes)
 {
+  vfloat<N> f[3];
+  for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
+  const vfloat<N> bh = Dot3N<N>(f, dir);
+  const vfloat<N> ff = Dot3N<N>(f, f);
+  const vfloat<N> c = ff - rad * rad;
   vfloat<N> t0, t1;
   vbool<N> miss;
   if constexpr (kFast) {
-    vfloat<N> f[3];
-    for (int i = 0; i < 3; ++i) f[i] = org[i] - cen[i];
-    const vfloat<N> bh = Dot3N<N>(f, dir);
-    const vfloat<N> c = Dot3N<N>(f, f) - rad * rad;
     const vfloat<N> b = vfloat<N>(2.0f) * bh;
     const vfloat<N> disc4 = b * b - vfloat<N>(4.0f) * a * c;
     miss = disc4 < vfloat<N>(0.0f);
@@ -129,31 +89,37 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
     t0 = (-b - sq) / (vfloat<N>(2.0f) * a);
     t1 = (-b + sq) / (vfloat<N>(2.0f) * a);
   } else {
-    const SphereTerms<N> T = Sphere_TermsN<N>(org, cen, dir, a, rad);
+    const vfloat<N> cx = f[1] * dir[2] - f[2] * dir[1];
+    const vfloat<N> cy = f[2] * dir[0] - f[0] * dir[2];
+    const vfloat<N> cz = f[0] * dir[1] - f[1] * dir[0];
+    const vfloat<N> ar2 = a * rad * rad;
+    const vfloat<N> cc = cx * cx + cy * cy + cz * cz;
+    vfloat<N> disc = ar2 - cc;
+    const vfloat<N> Q = vfloat<N>(0x1.0p-29f) * (ff * a);
     // Most tests miss for certain (Sphere_Intersect's -2^15 Q): skip the
     // bound, the square root and the divisions when all do.
-    if (None(AndNot(lanes, T.disc < vfloat<N>(-0x1.0p15f) * T.Q))) {
+    if (None(AndNot(lanes, disc < vfloat<N>(-0x1.0p15f) * Q))) {
       tHit = vfloat<N>(0.0f);
       return vbool<N>(false);
     }
     // Undecided lanes (Sphere_DiscUndecided) and lanes whose roots may be
-    // off (Sphere_NeedsDf) take the scalar kernels' cold tests.
-    const vbool<N> undecided = lanes & Sphere_UndecidedN<N>(T);
-    miss = (T.disc < vfloat<N>(0.0f)) | !lanes;
+    // off (Sphere_NeedsDf) take the double-float test.
+    const vbool<N> undecided = lanes & (disc * disc <= Q * (cc + vfloat<N>(0x1.0p-9f) * Q));
+    miss = (disc < vfloat<N>(0.0f)) | !lanes;
     if (All(AndNot(miss, undecided))) {
       tHit = vfloat<N>(0.0f);
       return vbool<N>(false);
     }
     vfloat<N> q;
-    Quadratic_RootsN<N>(a, T.bh, T.c, T.ff + rad * rad, T.disc, t0, t1, q);
-    const vbool<N> refine = undecided | Sphere_NeedsDfN<N>(T.c, T.ff + rad * rad, T.bh, T.disc, T.ar2 + T.cc, q, a,
-                                                           T.ff, T.cc, t0, t1, tmin, tmax, miss, anyHit);
+    Quadratic_RootsN<N>(a, bh, c, ff + rad * rad, disc, t0, t1, q);
+    const vbool<N> refine =
+        undecided | Sphere_NeedsDfN<N>(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax, miss, anyHit);
     if (Any(refine)) {
       const vbool<N> in0 = (t0 >= tmin) & (t0 <= tmax);
       const vbool<N> in1 = (t1 >= tmin) & (t1 <= tmax);
       tHit = Select(in0, t0, t1);
+      vbool<N> ok = AndNot(in0 | in1, miss);
       const unsigned undecidedBits = undecided.Bits();
-      const vfloat<N> ar2 = T.ar2, Q = T.Q;
       const RefinedLanes<N> r = RefineLanesN<N>(refine.Bits(), [=](int l, float* th) {
         float o[3], d[3];
         Lane3<N>(org, l, o);
@@ -164,7 +130,7 @@ CR_SIMD_INLINE vbool<N> Sphere_IntersectN(const vfloat<N> org[3], const vfloat<N
         if (undecidedBits >> l & 1u)
           return Sphere_IntersectUndecided(o, d, &sp, tmin[l], tmax[l], ar2[l], Q[l], th) != 0;
         return Sphere_IntersectDf(o, d, &sp, tmin[l], tmax[l], th) != 0;
-      }, tHit, AndNot(in0 | in1, miss));
+      }, tHit, ok);
       tHit = r.t;
       return r.ok;
     }
@@ -208,7 +174,8 @@ struct SimdTest<Sphere> {
     for (int l = 0; l < 4; ++l) rows[l] = PrimData<Sphere>(sc)[g[l]].center;
     vfloat<4> s[4];
     LoadTransposed4(rows, s);
-    return Sphere_IntersectN<kFast, 4>(pr.org, s, pr.dir, pr.dd, s[3], pr.tmin, tmax, t, pr.anyHit, vbool<4>(true));
+    return Sphere_IntersectN<kFast, 4>(pr.org, s, pr.dir, pr.dd, s[3], pr.tmin, tmax, t, pr.anyHit,
+                                       vbool<4>(true));
   }
 };
 
