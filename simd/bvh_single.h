@@ -69,19 +69,19 @@ CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
   return !(vint<K>::Load(g) == vint<K>(static_cast<int>(CR_NO_HIT)));
 }
 
-// The leaf's packs of type T (SimdTest<T>::Pack). Returns true to stop (an
-// occlusion query has its occluder); `changed` when the hit changed.
+// `count` packs of type T from `first` (SimdTest<T>::Pack). Returns true to
+// stop (an occlusion query has its occluder); `changed` when the hit changed.
 template <class T, int K, bool kFast, bool kStats>
-CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
-                                           int anyHit, TraceStatsSum& st, bool& changed)
+CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, std::uint32_t first, int count, const PackRay<K>& pr,
+                                           Hit& hit, int anyHit, TraceStatsSum& st, bool& changed)
 {
   constexpr unsigned k = kPrimIndex<T>;
   using Pack = typename SimdPrim<T>::template Pack<K>;
   // Exact ties between two of the type's primitives ordered by distance
   // (spheres, robust mode: Hit_CloserOn).
   constexpr bool kTies = SimdPrim<T>::kDistanceTies && !kFast;
-  const Pack* packs = static_cast<const Pack*>(sc.packs[k]) + leaf.first[k];
-  for (int p = 0; p < leaf.count[k]; ++p) {
+  const Pack* packs = static_cast<const Pack*>(sc.packs[k]) + first;
+  for (int p = 0; p < count; ++p) {
     const Pack& pk = packs[p];
     const vbool<K> valid = Pack_Valid<K>(pk.g);
     if constexpr (kStats) st.nIT += PopCount(valid.Bits());
@@ -95,16 +95,34 @@ CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, const WideLeaf
   return false;
 }
 
-// The leaf's packs, type by type. Returns true when the hit changed
-// (occlusion: as soon as it does).
+// A leaf slot (simd/bvh_wide.h): `p` its child without the leaf flag, `meta`
+// its meta word. Returns true when the hit changed (occlusion: as soon as it
+// does).
 template <int K, unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, const WideLeaf& leaf, const PackRay<K>& pr, Hit& hit,
-                                       int anyHit, TraceStatsSum& st)
+CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, std::uint32_t p, std::uint32_t meta, const PackRay<K>& pr,
+                                       Hit& hit, int anyHit, TraceStatsSum& st)
 {
   bool changed = false;
-#define CR_SIMD_LEAF_TYPE_(T, U, a)                                                                  \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                        \
-    if (WideLeaf_IntersectType<T, K, kFast, kStats>(sc, leaf, pr, hit, anyHit, st, changed)) return true;
+  if (meta != kWideMixedLeaf) {
+    // One type: its packs, straight from the slot.
+    const std::uint32_t type = (meta >> 16) - 1u;
+    const int count = static_cast<int>(meta & 0xffffu);
+#define CR_SIMD_LEAF_RUN_(T, U, a)                                                                 \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                      \
+    if (type == CR_PRIM_##U) {                                                                     \
+      WideLeaf_IntersectType<T, K, kFast, kStats>(sc, p, count, pr, hit, anyHit, st, changed);      \
+      return changed;                                                                              \
+    }
+    CR_PRIM_TYPES(CR_SIMD_LEAF_RUN_)
+#undef CR_SIMD_LEAF_RUN_
+    return false;
+  }
+  const WideLeaf& leaf = sc.wideLeaves[p];
+#define CR_SIMD_LEAF_TYPE_(T, U, a)                                                                          \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                                \
+    if (WideLeaf_IntersectType<T, K, kFast, kStats>(sc, leaf.first[CR_PRIM_##U], leaf.count[CR_PRIM_##U], pr, \
+                                                    hit, anyHit, st, changed))                               \
+      return true;
   CR_PRIM_TYPES(CR_SIMD_LEAF_TYPE_)
 #undef CR_SIMD_LEAF_TYPE_
   return changed;
@@ -115,7 +133,7 @@ template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   struct Entry {
-    std::uint32_t ref;
+    std::uint32_t ref, meta;
     float t;
   };
   // Each wide level pushes at most N - 1 entries; the wide depth is at most
@@ -134,7 +152,7 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
   PackRay<K> pr;
   PackRay_Init<K>(pr, ray);
   pr.anyHit = anyHit != 0;
-  std::uint32_t ref = 0;
+  std::uint32_t ref = 0, meta = 0;
   for (;;) {
     if (!(ref & kWideLeafFlag)) {
       const WideNode<N>& n = nodes[ref];
@@ -152,13 +170,14 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
         bits &= bits - 1;
         if (!bits) {
           ref = n.child[i0];
+          meta = n.meta[i0];
           continue;
         }
         // Two or more: push all, farthest deepest, and continue with the nearest.
         alignas(32) float te[N];
         tE.Store(te);
         const int base = sp;
-        stack[sp++] = {n.child[i0], te[i0]};
+        stack[sp++] = {n.child[i0], n.meta[i0], te[i0]};
         do {
           const int i = LowestBit(bits);
           bits &= bits - 1;
@@ -167,9 +186,11 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
             stack[j] = stack[j - 1];
             --j;
           }
-          stack[j] = {n.child[i], te[i]};
+          stack[j] = {n.child[i], n.meta[i], te[i]};
         } while (bits);
-        ref = stack[--sp].ref;
+        --sp;
+        ref = stack[sp].ref;
+        meta = stack[sp].meta;
         continue;
       }
     } else {
@@ -177,14 +198,15 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
         ++st.nTS;
         ++st.nLeaves;
       }
-      const WideLeaf& leaf = sc.wideLeaves[ref & ~kWideLeafFlag];
-      if (WideLeaf_Intersect<K, kTypes, kFast, kStats>(sc, leaf, pr, hit, anyHit, st) && anyHit) return;
+      if (WideLeaf_Intersect<K, kTypes, kFast, kStats>(sc, ref & ~kWideLeafFlag, meta, pr, hit, anyHit, st) && anyHit)
+        return;
     }
     for (;;) {
       if (sp == 0) return;
       --sp;
       if (stack[sp].t <= CullDistance<kFast>(hit.t)) {
         ref = stack[sp].ref;
+        meta = stack[sp].meta;
         break;
       }
     }

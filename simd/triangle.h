@@ -10,11 +10,20 @@
 
 namespace cr::simd {
 
+// kernels/triangle.h's Triangle_PlaneNormal, compiled with the host's flags
+// (bvh_wide_builder.cpp): the normal into n, the shared vertex returned.
+int PackPlaneNormal(const Triangle& t, float n[3]);
+
+// Pack-only bits of TrianglePack::flags above Triangle.flags' own: which
+// vertex the plane normal's two edges share (Triangle_PlaneNormal: 0, 1, 2).
+inline constexpr std::uint32_t kPackSharedV1 = 1u << 8, kPackSharedV2 = 1u << 9;
+
 template <int K>
-struct TrianglePack {  // 44 K bytes
+struct TrianglePack {  // 56 K bytes
   float v[3][3][K];    // [vertex][axis][lane]
+  float n[3][K];       // the plane normal, Triangle_PlaneNormal's bits
   std::uint32_t g[K];
-  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read)
+  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read) | kPackShared*
 };
 
 template <>
@@ -31,7 +40,13 @@ struct SimdPrim<Triangle> {
       p.v[1][a][l] = t.v1[a];
       p.v[2][a][l] = t.v2[a];
     }
-    p.flags[l] = t.flags;
+    // The normal depends on the triangle only: computed once here, with the
+    // scalar kernels' float operations (no contraction anywhere: the top
+    // CMakeLists.txt), so the pack test gets Triangle_PlaneTN's bits.
+    float n[3];
+    const int shared = PackPlaneNormal(t, n);
+    for (int a = 0; a < 3; ++a) p.n[a][l] = n[a];
+    p.flags[l] = t.flags | (shared == 1 ? kPackSharedV1 : 0u) | (shared == 2 ? kPackSharedV2 : 0u);
   }
 };
 
@@ -147,17 +162,24 @@ struct VecPlane {
 template <int N>
 struct PackPlane {
   const float (&pv)[3][3][N];
+  const float (&pn)[3][N];
   const std::uint32_t (&flags)[N];
+  // Triangle_PlaneTN with the pack's stored normal and shared vertex.
   vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax,
               vbool<N>& nearPlane) const
   {
-    vfloat<N> v0[3], v1[3], v2[3];
+    const vint<N> fl = vint<N>::Load(flags);
+    const vbool<N> s1 = vbool<N>::FromBits(MaskedLanes(fl, kPackSharedV1));
+    const vbool<N> s2 = vbool<N>::FromBits(MaskedLanes(fl, kPackSharedV2));
+    vfloat<N> n[3], p[3];
     for (int i = 0; i < 3; ++i) {
-      v0[i] = vfloat<N>::Load(pv[0][i]);
-      v1[i] = vfloat<N>::Load(pv[1][i]);
-      v2[i] = vfloat<N>::Load(pv[2][i]);
+      n[i] = vfloat<N>::Load(pn[i]);
+      p[i] = Select(s1, vfloat<N>::Load(pv[1][i]), Select(s2, vfloat<N>::Load(pv[2][i]), vfloat<N>::Load(pv[0][i]))) -
+             org[i];
     }
-    return Triangle_PlaneTN<N>(v0, v1, v2, org, dir, miss, tmin, tmax, nearPlane);
+    const vfloat<N> nd = Dot3N<N>(n, dir);
+    miss = miss | (nd == vfloat<N>(0.0f));
+    return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
   }
   unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
   unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vint<N>::Load(flags), bit); }
@@ -169,7 +191,7 @@ struct PackPlane {
       t.v1[i] = pv[1][i][l];
       t.v2[i] = pv[2][i][l];
     }
-    t.flags = flags[l];
+    t.flags = flags[l] & ~(kPackSharedV1 | kPackSharedV2);
     return t;
   }
 };
@@ -437,7 +459,7 @@ struct SimdTest<Triangle> {
         B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
         C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
       }
-      return Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u,
+      return Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.n, pk.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u,
                                      v, valid);
     }
   }

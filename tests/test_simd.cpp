@@ -5,8 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "host/core/error.h"
+#include "simd/bvh_wide_builder.h"
 #include "simd/isa.h"
 #include "simd/ray_order.h"
 #include "tests/test_util.h"
@@ -314,5 +318,86 @@ TEST_CASE("simd: auto on a large incoherent set (pilot blocks, then the rest) an
     std::size_t same = 0;
     for (std::size_t i = 0; i < hits.size(); ++i) same += std::memcmp(&hits[i], &scalarHits[i], sizeof(HitRecord)) == 0;
     CHECK(same == rays.size());
+  }
+}
+
+// The wide layout (simd/bvh_wide.h) as the single-ray kernels read it: every
+// reference of the binary BVH in exactly one pack slot reached from the
+// root, a one-type slot's packs of that type, and the collapse's merged
+// leaves filling the packs (the binary leaves alone average under 2 of 4).
+TEST_CASE("simd: the wide BVH holds every reference once, in packs the slots name")
+{
+  for (const char* name : {"tetra", "mount", "tree", "gears"}) {
+    CAPTURE(name);
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    const AccelData data = BuildAccel(scene, AccelKind::BVH, AccelParams{});
+    simd::KernelScene sc;
+    simd::SimdPrimData rows(scene);
+    rows.Bind(sc);
+    for (auto [n, k] : {std::pair{8, 4}, std::pair{4, 4}}) {
+      CAPTURE(n);
+      const auto wide = simd::BuildWideBVH(data.bvh, sc, n, k);
+      wide->Bind(sc);
+      std::vector<std::uint32_t> seen;
+      std::size_t slots = 0;
+      // Packs of type t from p, c of them: their valid lanes.
+      auto packs = [&](std::uint32_t t, std::uint32_t p, std::uint32_t c) {
+        scene.ForEachType([&](const auto& pieces, std::uint32_t type) {
+          using T = typename std::decay_t<decltype(pieces)>::value_type;
+          if (type != t) return;
+          const auto* pk = static_cast<const typename simd::SimdPrim<T>::template Pack<4>*>(sc.packs[t]) + p;
+          for (std::uint32_t i = 0; i < c; ++i)
+            for (int l = 0; l < 4; ++l) {
+              ++slots;
+              if (pk[i].g[l] == CR_NO_HIT) continue;
+              CHECK(Prim_Is(&sc.ranges, t, pk[i].g[l]));
+              seen.push_back(pk[i].g[l]);
+            }
+        });
+      };
+      std::vector<std::pair<std::uint32_t, std::uint32_t>> stack{{0u, 0u}};
+      while (!stack.empty()) {
+        const auto [child, meta] = stack.back();
+        stack.pop_back();
+        if (!(child & simd::kWideLeafFlag)) {
+          for (int i = 0; i < n; ++i) {
+            const std::uint32_t c = n == 8 ? static_cast<const simd::WideNode<8>*>(sc.wideNodes)[child].child[i]
+                                           : static_cast<const simd::WideNode<4>*>(sc.wideNodes)[child].child[i];
+            const std::uint32_t m = n == 8 ? static_cast<const simd::WideNode<8>*>(sc.wideNodes)[child].meta[i]
+                                           : static_cast<const simd::WideNode<4>*>(sc.wideNodes)[child].meta[i];
+            CHECK((m == 0) == !(c & simd::kWideLeafFlag));
+            stack.push_back({c, m});
+          }
+          continue;
+        }
+        const std::uint32_t p = child & ~simd::kWideLeafFlag;
+        if (meta != simd::kWideMixedLeaf) {
+          CHECK((meta & 0xffffu) > 0u);
+          packs((meta >> 16) - 1u, p, meta & 0xffffu);
+          continue;
+        }
+        const simd::WideLeaf& leaf = sc.wideLeaves[p];
+        for (std::uint32_t t = 0; t < CR_NUM_PRIM_TYPES; ++t) packs(t, leaf.first[t], leaf.count[t]);
+      }
+      std::vector<std::uint32_t> refs = data.bvh.refs;
+      std::sort(refs.begin(), refs.end());
+      std::sort(seen.begin(), seen.end());
+      CHECK(seen == refs);
+      // The binary leaves as they were, each type in its own packs: merging
+      // never takes more slots, and takes fewer wherever leaves were small.
+      std::size_t binarySlots = 0;
+      for (const BVHNode& b : data.bvh.nodes) {
+        if (b.count == 0) continue;
+        std::uint32_t per[CR_NUM_PRIM_TYPES] = {};
+        for (std::uint32_t i = b.first; i < b.first + b.count; ++i)
+          for (std::uint32_t t = 0; t < CR_NUM_PRIM_TYPES; ++t)
+            if (Prim_Is(&sc.ranges, t, data.bvh.refs[i])) ++per[t];
+        for (std::uint32_t m : per) binarySlots += 4 * ((m + 3) / 4);
+      }
+      MESSAGE(std::string(name) << " bvh" << n << "x4: " << seen.size() << " refs in " << slots
+                                << " pack slots (binary leaves: " << binarySlots << ")");
+      CHECK(slots <= binarySlots);
+      if (binarySlots > refs.size()) CHECK(slots < binarySlots);
+    }
   }
 }
