@@ -4,10 +4,10 @@
 // BVH4_CPU / BVH8_CPU: the binary BVH of host/accel/bvh_builder.cpp collapsed
 // into N-wide nodes whose child boxes are stored structure-of-arrays across
 // children (Embree's AABBNode: lower_x .. upper_z as N floats each), so one
-// ray tests all N child boxes with a few vector instructions. Leaves are the
-// binary leaves, unchanged in content; their primitives are repacked into
-// K-wide structure-of-arrays packs per type, so one ray tests K primitives at
-// once. Everything here is plain data: no code, no intrinsics, safe to
+// ray tests all N child boxes with a few vector instructions. A leaf is a
+// binary leaf or a small binary subtree merged by the collapse
+// (bvh_wide_builder.cpp); its primitives are repacked into K-wide
+// structure-of-arrays packs per type, so one ray tests K primitives at once. Everything here is plain data: no code, no intrinsics, safe to
 // include from every translation unit whatever its ISA flags.
 #pragma once
 
