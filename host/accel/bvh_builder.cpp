@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <atomic>
 #include <memory>
-#include <numeric>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -88,11 +87,10 @@ struct Bounds2 {
   }
 };
 
-// The three axes' bins of a node, filled in one pass.
 // The three axes' bins of a node, filled in one pass. A bin's box is
 // written when its first reference arrives (cnt 0 -> 1) and read only where
 // cnt > 0, so a node's bins need no initialisation beyond the counts (3 KB
-// of boxes per node otherwise, most of the cost of small nodes).
+// of boxes per node otherwise).
 struct Bins {
   struct Raw {
     F4 lo, hi;
