@@ -234,6 +234,11 @@ struct Collapser {
         slot[i] = {Node(kids[i]), 0u};
         continue;
       }
+      const BVHNode& k = bvh.nodes[kids[i]];
+      if (k.count > 0) {  // a binary leaf: its refs in place, sorted by the builder
+        slot[i] = Leaf(bvh.refs.data() + k.first, k.count);
+        continue;
+      }
       refs.clear();
       SubtreeRefs(kids[i], refs);
       std::sort(refs.begin(), refs.end());

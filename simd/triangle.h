@@ -55,15 +55,18 @@ struct SimdPrim<Triangle> {
 #ifdef CR_SIMD_NS
 namespace cr::simd::CR_SIMD_NS {
 
-// n . p / nd with the products summed in Dot3's order; `nearPlane`: the
+// t = n . p / n . d with the products summed in Dot3's order (a ray with
+// n . d == 0 joins `miss`); `nearPlane`: the
 // lanes where Triangle_PlaneNeedsDf holds (n . p cancels by more than 16 and
 // t may lie in [tmin, tmax]), computed as there, without a branch (most
 // tests past the edge functions of a ray leaving a surface are inexact, and
 // a branch on it mispredicts) and without a second division.
 template <int N>
-CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], vfloat<N> nd, vfloat<N> tmin,
-                                            vfloat<N> tmax, vbool<N>& nearPlane)
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N> p[3], const vfloat<N> dir[3],
+                                            vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax, vbool<N>& nearPlane)
 {
+  const vfloat<N> nd = Dot3N<N>(n, dir);
+  miss = miss | (nd == vfloat<N>(0.0f));
   const vfloat<N> np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   const vfloat<N> np = (np0 + np1) + np2;
   const vfloat<N> sum = (Abs(np0) + Abs(np1)) + Abs(np2);
@@ -106,9 +109,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   n[0] = ea[1] * eb[2] - ea[2] * eb[1];
   n[1] = ea[2] * eb[0] - ea[0] * eb[2];
   n[2] = ea[0] * eb[1] - ea[1] * eb[0];
-  const vfloat<N> nd = Dot3N<N>(n, dir);
-  miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
+  return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
@@ -125,9 +126,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneT1N(const Triangle& tri, const vfloat<N> 
   const vfloat<N> n[3] = {vfloat<N>(nf[0]), vfloat<N>(nf[1]), vfloat<N>(nf[2])};
   vfloat<N> p[3];
   for (int i = 0; i < 3; ++i) p[i] = vfloat<N>(vk[i]) - org[i];
-  const vfloat<N> nd = Dot3N<N>(n, dir);
-  miss = miss | (nd == vfloat<N>(0.0f));
-  return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
+  return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
 }
 
 // Plane sources for Triangle_WatertightN: T(org, dir, miss, tmin, tmax, nearPlane) gives
@@ -177,9 +176,7 @@ struct PackPlane {
       p[i] = Select(s1, vfloat<N>::Load(pv[1][i]), Select(s2, vfloat<N>::Load(pv[2][i]), vfloat<N>::Load(pv[0][i]))) -
              org[i];
     }
-    const vfloat<N> nd = Dot3N<N>(n, dir);
-    miss = miss | (nd == vfloat<N>(0.0f));
-    return Triangle_PlaneDivN<N>(n, p, nd, tmin, tmax, nearPlane);
+    return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
   }
   unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
   unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vint<N>::Load(flags), bit); }
