@@ -32,7 +32,15 @@ CR_FUNC uint cr_float_bits(float x) { return as_uint(x); }
 CR_FUNC float cr_bits_float(uint x) { return as_float(x); }
 #define cr_isnan(x) isnan(x)
 #define CR_SQRTF(x) sqrt(x)
+/* Cold paths are calls (PoCL: inlined, they slowed the hot loops and one
+ * form crashed its compiler), except under CR_COLD_INLINE
+ * (CELLRAY_CL_COLD=inline, for GPUs: a call's frame and arguments take
+ * scratch memory there; docs/OPENCL.md, the GPU compile table). */
+#ifdef CR_COLD_INLINE
+#define CR_COLD
+#else
 #define CR_COLD __attribute__((noinline))
+#endif
 #define CR_FUNC_HOT static inline
 
 #else /* C++ */

@@ -15,6 +15,8 @@
  *   CR_SOURCE_RAYS, CR_SOURCE_CAMERA  rays from a buffer or generated here
  *                                     (absent: both)
  *   CR_PACKET_W, CR_PACKET_H          work-group tile of the packet kernels
+ *   CR_COLD_INLINE                    cold paths inlined (prelude.h;
+ *                                     CELLRAY_CL_COLD=inline)
  *   CR_CAMERA_FP64                    primary rays generated in double, as
  *                                     host/scene/camera.cpp does (bit-equal)
  *   CR_MATERIALS, CR_LIGHTS           reserved for the renderer's kernels

@@ -10,7 +10,7 @@ pkgs=(
   libglm-dev libopenimageio-dev openimageio-tools libtbb-dev libcli11-dev
   nlohmann-json3-dev libfmt-dev doctest-dev libbenchmark-dev libtinyobjloader-dev
   libembree-dev python3-matplotlib oclgrind
-  clang libclang-rt-14-dev llvm
+  clang libclang-rt-14-dev llvm clang-15 libclc-15
 )
 
 missing=()

@@ -4,8 +4,9 @@
 // octree, BVH) x variant (ray, packet) x query (closest, occlusion) x
 // precision (fast, robust, fp64) x primitive-type set (every non-empty subset
 // of spheres, triangles, cones: the backend compiles only the types a scene
-// has), 252 configurations, plus the camera kernels with counters, the
-// generic programs and the renderer's unified hits. Each runs the real
+// has), 252 configurations, the 84 robust ones again with their cold paths
+// inlined (CELLRAY_CL_COLD=inline), plus the camera kernels with counters,
+// the generic programs and the renderer's unified hits. Each runs the real
 // binary as `oclgrind --data-races --uninitialized --check-api cellray trace
 // ...` on a few rays of a small scene and must exit 0 with nothing in
 // Oclgrind's log and nothing on stderr, and answer as PoCL does (closest hit:
@@ -195,13 +196,13 @@ struct Outcome {
 // to a cache of their own under the build tree; $CELLRAY_DEVICE is cleared
 // (under the wrapper Oclgrind is the only device) and so is any injected fault.
 Outcome RunUnderOclgrind(const std::string& args, const std::string& tag, bool optimised = false,
-                         const fs::path& cacheDir = BuildDir() / "test-cache" / "oclgrind")
+                         const fs::path& cacheDir = BuildDir() / "test-cache" / "oclgrind", const std::string& env = "")
 {
   const fs::path log = Dir() / (tag + ".log"), out = Dir() / (tag + ".out"), err = Dir() / (tag + ".err");
   const std::string cmd = fmt::format(
-      "env -u CELLRAY_DEVICE -u CELLRAY_CL_FAULT CELLRAY_CACHE_DIR={} {} --log {} {}--data-races --uninitialized "
-      "--check-api {} {} > {} 2> {}",
-      cacheDir.string(), OclgrindPath(), log.string(), optimised ? "" : "--build-options -cl-opt-disable ",
+      "env -u CELLRAY_DEVICE -u CELLRAY_CL_FAULT -u CELLRAY_CL_COLD {}CELLRAY_CACHE_DIR={} {} --log {} {}--data-races "
+      "--uninitialized --check-api {} {} > {} 2> {}",
+      env, cacheDir.string(), OclgrindPath(), log.string(), optimised ? "" : "--build-options -cl-opt-disable ",
       CELLRAY_BINARY, args, out.string(), err.string());
   const int status = std::system(cmd.c_str());
   Outcome o;
@@ -257,8 +258,10 @@ void CheckClean(const Outcome& o, const std::string& what)
 
 constexpr auto& kAccels = kAccelKinds;
 
-// Every type set x structure x query for one precision and variant (42 runs).
-void Sweep(Precision precision, const char* variant)
+// Every type set x structure x query for one precision and variant (42 runs);
+// `coldInline`: the cold paths inlined (CELLRAY_CL_COLD=inline, the form
+// offered for GPUs; host/cl/cl_options.cpp).
+void Sweep(Precision precision, const char* variant, bool coldInline = false)
 {
   auto cache = test::OpenCLTestCacheDir();
   int runs = 0;
@@ -268,14 +271,15 @@ void Sweep(Precision precision, const char* variant)
       for (bool occlusion : {false, true}) {
         const std::string what = fmt::format("{} {} {}:4x4 {} {}", ts.name, AccelKindName(accel), variant,
                                              occlusion ? "occlusion" : "closest", PrecisionName(precision));
-        const std::string tag = fmt::format("{}-{}-{}-{}-{}", ts.name, AccelKindName(accel), variant,
-                                            occlusion ? "o" : "c", PrecisionName(precision));
+        const std::string tag = fmt::format("{}-{}-{}-{}-{}{}", ts.name, AccelKindName(accel), variant,
+                                            occlusion ? "o" : "c", PrecisionName(precision),
+                                            coldInline ? "-inline" : "");
         const std::string hitsPath = (Dir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(
             fmt::format("trace {} --rays {} --backend opencl --accel {} --variant {}:4x4 --precision {}{} -o {}",
                         f.scene, f.rays, AccelKindName(accel), variant, PrecisionName(precision),
                         occlusion ? " --occlusion" : "", hitsPath),
-            tag);
+            tag, false, BuildDir() / "test-cache" / "oclgrind", coldInline ? "CELLRAY_CL_COLD=inline " : "");
         ++runs;
         CheckClean(o, what);
         if (o.code != 0) continue;
@@ -286,7 +290,7 @@ void Sweep(Precision precision, const char* variant)
       }
   }
   MESSAGE(runs, " configurations (", std::string(PrecisionName(precision)), ", ", std::string(variant),
-          ") under oclgrind");
+          coldInline ? ", cold paths inlined" : "", ") under oclgrind");
 }
 
 }  // namespace
@@ -314,6 +318,15 @@ TEST_CASE("oclgrind: packet kernels, fast, every type set x structure x query" *
 TEST_CASE("oclgrind: packet kernels, robust, every type set x structure x query" * doctest::skip(NoOclgrind()))
 {
   Sweep(Precision::Robust, "packet");
+}
+
+// The robust programs with their cold paths inlined (CELLRAY_CL_COLD=inline):
+// fast and fp64 programs have none, so they are the same either way.
+TEST_CASE("oclgrind: per-ray and packet kernels, robust, cold paths inlined, every type set x structure x query" *
+          doctest::skip(NoOclgrind()))
+{
+  Sweep(Precision::Robust, "ray", true);
+  Sweep(Precision::Robust, "packet", true);
 }
 
 TEST_CASE("oclgrind: packet kernels, fp64, every type set x structure x query" * doctest::skip(NoOclgrind()))

@@ -631,6 +631,26 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
     CHECK(r.code == kExitBadInput);
     CHECK(r.err.find("CELLRAY_CL_FAULT 'build,bogus': unknown fault 'bogus'") != std::string::npos);
   }
+  // CELLRAY_CL_COLD: a bad value, and the inlined form on a CPU device
+  // (PoCL's compiler crashes on some of it), are bad input by name; `call`
+  // is what a CPU device builds anyway.
+  for (const char* cold : {"bogus", "inline"}) {
+    const CliRun r = RunCellray(fmt::format("CELLRAY_CL_COLD={}", cold),
+                                fmt::format("{} --backend opencl", trace), dir);
+    INFO(cold, " stderr: ", r.err);
+    CHECK(r.code == kExitBadInput);
+    CHECK(r.err.find(fmt::format("CELLRAY_CL_COLD={}", std::string(cold) == "bogus" ? "'bogus'" : "inline")) !=
+          std::string::npos);
+    CHECK(r.out.empty());
+  }
+  {
+    const fs::path hits = dir / "cold-call.hits";
+    const CliRun r = RunCellray("CELLRAY_CL_COLD=call",
+                                fmt::format("{} --backend opencl -o {}", trace, hits.string()), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == 0);
+    CHECK(Slurp(hits) == expected);
+  }
   // A render falls back too (the first Trace fails), to the simd image.
   {
     const fs::path a = dir / "fallback.exr", b = dir / "simd.exr";

@@ -1,6 +1,7 @@
 #include "host/cl/cl_options.h"
 
 #include <cstdio>
+#include <cstdlib>
 
 #include <fmt/format.h>
 
@@ -84,6 +85,25 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
       s.packetH = static_cast<int>(dev.maxWorkGroupSize / 8 > 0 ? dev.maxWorkGroupSize / 8 : 1);
     }
   }
+  // Cold paths (the exact fallbacks of the robust tests) are calls unless
+  // CELLRAY_CL_COLD=inline asks for them inlined (CR_COLD_INLINE). On a GPU a
+  // call's frame and the arrays passed to it live in scratch memory;
+  // inlined, gfx906's robust packet kernels lose their 192-208 bytes of
+  // scratch but those of triangle-only grids and octrees need 11 more VGPRs
+  // and drop from 3 waves per SIMD to 2, the ray kernels 25-140 more
+  // (bench/gpu_compile.py, docs/OPENCL.md). Neither form was timed on a GPU,
+  // so the default stays as measured on PoCL. Refused on a CPU device other
+  // than a simulator: PoCL 3.1's compiler crashes on inlined cone programs.
+  if (const char* cold = std::getenv("CELLRAY_CL_COLD"); cold && *cold) {
+    const std::string c = cold;
+    if (c != "inline" && c != "call")
+      throw InputError(fmt::format("CELLRAY_CL_COLD='{}': expected inline or call", c));
+    if (c == "inline" && dev.type == "cpu" && !dev.simulator)
+      throw InputError(fmt::format("CELLRAY_CL_COLD=inline: not on the CPU device '{}' (PoCL 3.1's compiler "
+                                   "crashes on some inlined cold paths; docs/OPENCL.md)",
+                                   dev.name));
+    s.coldInline = c == "inline";
+  }
   return s;
 }
 
@@ -95,6 +115,7 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.precision == Precision::Fp64) o += " -DCR_FP64";
   if (s.cameraFp64) o += " -DCR_CAMERA_FP64";
   if (s.stats) o += " -DCR_STATS";
+  if (s.coldInline) o += " -DCR_COLD_INLINE";
   o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
   if (!s.generic) {
 #define CR_HAS_OPTION_(T, U, a) o += fmt::format(" -DCR_HAS_" #U "={}", (s.types >> CR_PRIM_##U) & 1u);

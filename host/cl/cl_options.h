@@ -28,6 +28,7 @@ struct ClProgramSpec {
   bool camera = false;           // primary rays generated on the device, else rays from a buffer
   int packetW = 8, packetH = 8;  // work-group tile (the packet of the packet kernels)
   bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's
+  bool coldInline = false;       // cold paths inlined (CR_COLD_INLINE; CELLRAY_CL_COLD=inline)
   // Hook for the renderer's kernels: extra "NAME=VALUE" definitions (material
   // count, light count), appended as -D options.
   std::vector<std::string> defines;
