@@ -37,9 +37,11 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
   X(gridDensity, double, "--grid-density", "Grid cells per primitive (Woo/Klimaszewski lambda)") \
   X(octreeLeaf, int, "--octree-leaf", "Max references per octree leaf")                        \
   X(octreeDepth, int, "--octree-depth", "Max octree depth")                                    \
-  X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")
+  X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
+  X(bvhQuality, std::string, "--bvh-quality",                                                   \
+    "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")
 struct AccelParams {
-#define CR_ACCEL_PARAM_FIELD(f, T, opt, help) T f = 0;
+#define CR_ACCEL_PARAM_FIELD(f, T, opt, help) T f{};
   CR_ACCEL_PARAMS(CR_ACCEL_PARAM_FIELD)
 #undef CR_ACCEL_PARAM_FIELD
 };

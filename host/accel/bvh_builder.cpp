@@ -14,6 +14,7 @@
 
 #include "host/accel/accel.h"
 #include "host/core/error.h"
+#include "host/prims/prim_host.h"
 
 namespace cr {
 
@@ -25,6 +26,16 @@ constexpr int kDefaultLeaf = 4;
 // (<= 32 + log2(n)) so the traversal stack (CR_BVH_STACK = 64) never overflows.
 constexpr int kSahDepth = 32;
 constexpr std::uint32_t kParallelThreshold = 4096;
+// Spatial splits (--bvh-quality high; Stich, Friedrich & Dietrich 2009,
+// "Spatial splits in bounding volume hierarchies"): tried where the best
+// object split's two boxes overlap by more than kSplitAlpha of the root's
+// area, over kSpatialBins planes per axis, within a budget of
+// kSplitBudget x the primitives in extra references, shared among subtrees
+// in proportion to their sizes (so the tree does not depend on the order
+// in which threads consume it).
+constexpr int kSpatialBins = 16;
+constexpr float kSplitAlpha = 1e-5f;
+constexpr double kSplitBudget = 0.3;
 
 // Four floats (x, y, z and a lane kept at 0) in one register: GCC's and
 // clang's vector extension, SSE on x86-64, whatever the target has elsewhere.
@@ -53,6 +64,7 @@ struct BuildNode {
   Box box;
   std::unique_ptr<BuildNode> kids[2];
   std::uint32_t first = 0, count = 0;
+  std::vector<std::uint32_t> ids;  // a leaf's references (spatial-split builds; else refs[first, first + count))
 };
 
 // A reference with its box, moved with it by the partitions (Embree's
@@ -123,6 +135,12 @@ struct Builder {
   std::vector<PrimRef> refs;
   int maxLeaf = kDefaultLeaf;
   std::atomic<std::uint64_t> nodeCount{0};
+  // Spatial-split builds: the scene (to clip primitives), its ranges, the
+  // root's area, and the references made by splits.
+  const Scene* scene = nullptr;
+  PrimRanges ranges{};
+  float rootArea = 0.0f;
+  std::atomic<std::uint64_t> splitRefs{0};
 
   // add(acc, b, e) over [begin, end) into `out` (default-initialised),
   // in parallel when large. An out parameter, not a return value: a node's
@@ -144,6 +162,308 @@ struct Builder {
           x.Join(y);
           return x;
         });
+  }
+
+  // The best binned-SAH object split of refs[begin, end) over the three
+  // axes (cost without the parent's area; axis -1: none), with the boxes of
+  // its two sides (the spatial-split test measures their overlap).
+  struct ObjectSplit {
+    float cost = INFINITY;
+    int axis = -1, split = -1;
+    float scale = 0.0f;
+    Box left, right;
+  };
+  ObjectSplit FindObjectSplit(const PrimRef* span, std::uint32_t n, const Bounds2& nb) const
+  {
+    const std::uint32_t begin = 0, end = n;
+    const Box& cb = nb.cb;
+    const F4 ext = cb.hi - cb.lo;
+    // Binned SAH over all three axes, binned in one pass.
+    float scale[3];
+    for (int a = 0; a < 3; ++a) scale[a] = ext[a] > 0.0f ? float(kBins) / ext[a] : 0.0f;
+    const F4 sc = {scale[0], scale[1], scale[2], 0.0f};
+    Bins bins;
+    Reduce(bins, begin, end, [&](Bins& acc, std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        const PrimRef& r = span[i];
+        const F4 lo = r.Lo();
+        const F4 f = (0.5f * (lo + r.hi) - cb.lo) * sc;
+        for (int a = 0; a < 3; ++a) {
+          if (ext[a] <= 0.0f) continue;
+          const int k = std::min(kBins - 1, static_cast<int>(f[a]));
+          acc.Add(a, k, lo, r.hi);
+        }
+      }
+    });
+    ObjectSplit best;
+    for (int a = 0; a < 3; ++a) {
+      if (ext[a] <= 0.0f) continue;
+      const std::uint32_t* cnt = bins.cnt[a];
+      // The splits after non-empty bins only: a split after an empty bin
+      // costs what the split before it costs (the same two sets), and
+      // only a strictly lower cost replaces the best, so skipping them
+      // chooses the same split as sweeping all kBins - 1.
+      int used[kBins], m = 0;
+      for (int b = 0; b < kBins; ++b) {  // without a branch: which bins are empty is data
+        used[m] = b;
+        m += cnt[b] != 0;
+      }
+      float rightArea[kBins];
+      std::uint32_t rightCnt[kBins];
+      Box acc;
+      std::uint32_t c = 0;
+      for (int j = m - 1; j > 0; --j) {
+        acc.Extend(bins.BoxOf(a, used[j]));
+        c += cnt[used[j]];
+        rightArea[j] = acc.Area();
+        rightCnt[j] = c;
+      }
+      acc = Box{};
+      c = 0;
+      for (int j = 0; j < m - 1; ++j) {
+        acc.Extend(bins.BoxOf(a, used[j]));
+        c += cnt[used[j]];
+        float cost = acc.Area() * float(c) + rightArea[j + 1] * float(rightCnt[j + 1]);
+        if (cost < best.cost) {
+          best.cost = cost;
+          best.axis = a;
+          best.split = used[j];
+        }
+      }
+    }
+    if (best.axis >= 0) {
+      best.scale = scale[best.axis];
+      for (int b = 0; b < kBins; ++b)
+        if (bins.cnt[best.axis][b]) (b <= best.split ? best.left : best.right).Extend(bins.BoxOf(best.axis, b));
+    }
+    return best;
+  }
+
+  // Partitions refs[0, n) by the object split; returns the size of the
+  // left side (n / 2, the order kept, when one side would be empty).
+  static std::uint32_t PartitionObject(PrimRef* span, std::uint32_t n, const Box& cb, const ObjectSplit& os)
+  {
+    PrimRef* it = std::partition(span, span + n, [&](const PrimRef& r) {
+      int b = std::min(kBins - 1, static_cast<int>((r.Centroid()[os.axis] - cb.lo[os.axis]) * os.scale));
+      return b <= os.split;
+    });
+    const auto mid = static_cast<std::uint32_t>(it - span);
+    return mid == 0 || mid == n ? n / 2 : mid;
+  }
+
+  // The node's box and centroid box over span[0, n).
+  Bounds2 NodeBounds(const PrimRef* span, std::uint32_t n) const
+  {
+    Bounds2 nb;
+    Reduce(nb, 0, n, [&](Bounds2& acc, std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) acc.Add(span[i]);
+    });
+    return nb;
+  }
+
+  // Reference r cut by the plane x[axis] = pos (SplitBounds of its
+  // primitive, within r's own box) into its two sides; an empty box: that
+  // side has none of it.
+  void Split(const PrimRef& r, int axis, float pos, PrimRef& left, PrimRef& right) const
+  {
+    const F4 rlo = r.Lo();
+    Bounds box;
+    box.lo = glm::vec3(rlo[0], rlo[1], rlo[2]);
+    box.hi = glm::vec3(r.hi[0], r.hi[1], r.hi[2]);
+    const std::uint32_t g = r.Id();
+    Bounds l, h;
+    scene->Visit(ranges, g, [&](const auto& piece, std::uint32_t) { SplitBounds(piece, box, axis, pos, l, h); });
+    const float id = __builtin_bit_cast(float, g);
+    left = PrimRef{F4{l.lo.x, l.lo.y, l.lo.z, id}, F4{l.hi.x, l.hi.y, l.hi.z, 0.0f}};
+    right = PrimRef{F4{h.lo.x, h.lo.y, h.lo.z, id}, F4{h.hi.x, h.hi.y, h.hi.z, 0.0f}};
+  }
+  static bool EmptyRef(const PrimRef& r)
+  {
+    const F4 lo = r.Lo();
+    return !(lo[0] <= r.hi[0] && lo[1] <= r.hi[1] && lo[2] <= r.hi[2]);
+  }
+
+  // The best spatial split of span[0, n) in `box`: kSpatialBins planes per
+  // axis, each reference entering at the bin of its low side and leaving at
+  // the bin of its high side, its clipped part added to every bin between
+  // (SAH cost without the parent's area, as the object split's).
+  struct SpatialSplit {
+    float cost = INFINITY;
+    int axis = -1;
+    float pos = 0.0f;
+  };
+  static float Plane(const Box& box, int a, int k)
+  {
+    return k == kSpatialBins ? box.hi[a] : box.lo[a] + float(k) * ((box.hi[a] - box.lo[a]) / float(kSpatialBins));
+  }
+  SpatialSplit FindSpatialSplit(const PrimRef* span, std::uint32_t n, const Box& box) const
+  {
+    struct SBins {
+      std::uint32_t enter[3][kSpatialBins] = {}, exit[3][kSpatialBins] = {};
+      Box box[3][kSpatialBins];
+      void Join(const SBins& o)
+      {
+        for (int a = 0; a < 3; ++a)
+          for (int k = 0; k < kSpatialBins; ++k) {
+            enter[a][k] += o.enter[a][k];
+            exit[a][k] += o.exit[a][k];
+            box[a][k].Extend(o.box[a][k]);
+          }
+      }
+    };
+    const F4 ext = box.hi - box.lo;
+    SBins sb;
+    Reduce(sb, 0, n, [&](SBins& acc, std::uint32_t b, std::uint32_t e) {
+      for (std::uint32_t i = b; i < e; ++i) {
+        const PrimRef& r = span[i];
+        const F4 lo = r.Lo();
+        for (int a = 0; a < 3; ++a) {
+          if (ext[a] <= 0.0f) continue;
+          const float inv = float(kSpatialBins) / ext[a];
+          const int b0 = std::clamp(static_cast<int>((lo[a] - box.lo[a]) * inv), 0, kSpatialBins - 1);
+          const int b1 = std::clamp(static_cast<int>((r.hi[a] - box.lo[a]) * inv), b0, kSpatialBins - 1);
+          ++acc.enter[a][b0];
+          ++acc.exit[a][b1];
+          if (b0 == b1) {
+            acc.box[a][b0].Extend(lo, r.hi);
+            continue;
+          }
+          // Cut at each plane in turn: the left part fills bin k, the
+          // rest goes on.
+          PrimRef rest = r;
+          for (int k = b0; k < b1; ++k) {
+            PrimRef l, h;
+            Split(rest, a, Plane(box, a, k + 1), l, h);
+            if (!EmptyRef(l)) acc.box[a][k].Extend(l.Lo(), l.hi);
+            if (EmptyRef(h)) break;
+            rest = h;
+            if (k + 1 == b1) acc.box[a][b1].Extend(rest.Lo(), rest.hi);
+          }
+        }
+      }
+    });
+    SpatialSplit best;
+    for (int a = 0; a < 3; ++a) {
+      if (ext[a] <= 0.0f) continue;
+      float rightArea[kSpatialBins];
+      std::uint32_t rightCnt[kSpatialBins];
+      Box acc;
+      std::uint32_t c = 0;
+      for (int k = kSpatialBins - 1; k > 0; --k) {
+        acc.Extend(sb.box[a][k]);
+        c += sb.exit[a][k];
+        rightArea[k] = acc.Area();
+        rightCnt[k] = c;
+      }
+      acc = Box{};
+      c = 0;
+      for (int k = 0; k < kSpatialBins - 1; ++k) {
+        acc.Extend(sb.box[a][k]);
+        c += sb.enter[a][k];
+        if (c == 0 || rightCnt[k + 1] == 0) continue;
+        const float cost = acc.Area() * float(c) + rightArea[k + 1] * float(rightCnt[k + 1]);
+        if (cost < best.cost) {
+          best.cost = cost;
+          best.axis = a;
+          best.pos = Plane(box, a, k + 1);
+        }
+      }
+    }
+    return best;
+  }
+
+  // Spatial-split build (--bvh-quality high): each node owns its references
+  // (a split can put one on both sides, clipped to each); a leaf keeps its
+  // ids. `budget`: extra references this subtree may still make.
+  std::unique_ptr<BuildNode> BuildSpatial(std::vector<PrimRef> v, int depth, double budget)
+  {
+    auto node = std::make_unique<BuildNode>();
+    ++nodeCount;
+    const auto n = static_cast<std::uint32_t>(v.size());
+    const Bounds2 nb = NodeBounds(v.data(), n);
+    node->box = nb.box;
+    auto leaf = [&]() {
+      std::sort(v.begin(), v.end(), [](const PrimRef& x, const PrimRef& y) { return x.Id() < y.Id(); });
+      node->ids.resize(n);
+      for (std::uint32_t i = 0; i < n; ++i) node->ids[i] = v[i].Id();
+      node->count = n;
+      return std::move(node);
+    };
+    if (n <= 1) return leaf();
+    const Box& cb = nb.cb;
+    const F4 ext = cb.hi - cb.lo;
+    const int axis = ext[0] > ext[1] ? (ext[0] > ext[2] ? 0 : 2) : (ext[1] > ext[2] ? 1 : 2);
+    std::vector<PrimRef> left, right;
+    bool done = false;
+    if (depth < kSahDepth) {
+      ObjectSplit os;
+      if (ext[axis] > 0.0f) os = FindObjectSplit(v.data(), n, nb);
+      SpatialSplit ss;
+      if (budget >= 1.0) {
+        Box overlap;
+        overlap.lo = os.left.lo < os.right.lo ? os.right.lo : os.left.lo;
+        overlap.hi = os.left.hi < os.right.hi ? os.left.hi : os.right.hi;
+        if (os.axis < 0 || overlap.Area() > kSplitAlpha * rootArea) ss = FindSpatialSplit(v.data(), n, nb.box);
+      }
+      const float best = std::min(os.cost, ss.cost);
+      const float parentArea = node->box.Area();
+      const float splitCost = parentArea > 0.0f ? 1.0f + best / parentArea : INFINITY;
+      if (!(best < INFINITY) || (n <= static_cast<std::uint32_t>(maxLeaf) && float(n) <= splitCost)) {
+        if (n <= static_cast<std::uint32_t>(maxLeaf)) return leaf();
+      } else if (ss.cost < os.cost) {
+        const int a = ss.axis;
+        for (const PrimRef& r : v) {
+          if (r.hi[a] <= ss.pos) {
+            left.push_back(r);
+          } else if (r.Lo()[a] >= ss.pos) {
+            right.push_back(r);
+          } else {
+            PrimRef l, h;
+            Split(r, a, ss.pos, l, h);
+            if (!EmptyRef(l)) left.push_back(l);
+            if (!EmptyRef(h)) right.push_back(h);
+          }
+        }
+        // Within the budget, and each side smaller than the node.
+        done = !left.empty() && !right.empty() && left.size() < n && right.size() < n &&
+               double(left.size() + right.size()) - double(n) <= budget;
+        if (!done) {
+          left.clear();
+          right.clear();
+        }
+      }
+      if (!done && os.axis >= 0 && !(ss.cost < os.cost)) {
+        const std::uint32_t mid = PartitionObject(v.data(), n, cb, os);
+        left.assign(v.begin(), v.begin() + mid);
+        right.assign(v.begin() + mid, v.end());
+        done = true;
+      }
+    }
+    if (!done) {
+      // Object median (deep nodes, coinciding centroids, a failed split).
+      if (ext[axis] <= 0.0f && n <= static_cast<std::uint32_t>(maxLeaf)) return leaf();
+      const std::uint32_t mid = n / 2;
+      if (ext[axis] > 0.0f)
+        std::nth_element(v.begin(), v.begin() + mid, v.end(), [axis](const PrimRef& x, const PrimRef& y) {
+          return x.Centroid()[axis] < y.Centroid()[axis];
+        });
+      left.assign(v.begin(), v.begin() + mid);
+      right.assign(v.begin() + mid, v.end());
+    }
+    const double extra = double(left.size() + right.size()) - double(n);
+    splitRefs += static_cast<std::uint64_t>(extra);
+    const double rest = std::max(0.0, budget - extra);
+    const double shareL = rest * double(left.size()) / double(left.size() + right.size());
+    const double shareR = rest - shareL;
+    std::vector<PrimRef>().swap(v);
+    if (n > kParallelThreshold) {
+      tbb::parallel_invoke([&] { node->kids[0] = BuildSpatial(std::move(left), depth + 1, shareL); },
+                           [&] { node->kids[1] = BuildSpatial(std::move(right), depth + 1, shareR); });
+    } else {
+      node->kids[0] = BuildSpatial(std::move(left), depth + 1, shareL);
+      node->kids[1] = BuildSpatial(std::move(right), depth + 1, shareR);
+    }
+    return node;
   }
 
   std::unique_ptr<BuildNode> Build(std::uint32_t begin, std::uint32_t end, int depth)
@@ -181,75 +501,16 @@ struct Builder {
       mid = begin + n / 2;
       std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end, byCentroid(axis));
     } else {
-      // Binned SAH over all three axes, binned in one pass.
-      float scale[3];
-      for (int a = 0; a < 3; ++a) scale[a] = ext[a] > 0.0f ? float(kBins) / ext[a] : 0.0f;
-      const F4 sc = {scale[0], scale[1], scale[2], 0.0f};
-      Bins bins;
-      Reduce(bins, begin, end, [&](Bins& acc, std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t i = b; i < e; ++i) {
-          const PrimRef& r = refs[i];
-          const F4 lo = r.Lo();
-          const F4 f = (0.5f * (lo + r.hi) - cb.lo) * sc;
-          for (int a = 0; a < 3; ++a) {
-            if (ext[a] <= 0.0f) continue;
-            const int k = std::min(kBins - 1, static_cast<int>(f[a]));
-            acc.Add(a, k, lo, r.hi);
-          }
-        }
-      });
-      float bestCost = INFINITY;
-      int bestAxis = -1, bestSplit = -1;
-      for (int a = 0; a < 3; ++a) {
-        if (ext[a] <= 0.0f) continue;
-        const std::uint32_t* cnt = bins.cnt[a];
-        // The splits after non-empty bins only: a split after an empty bin
-        // costs what the split before it costs (the same two sets), and
-        // only a strictly lower cost replaces the best, so skipping them
-        // chooses the same split as sweeping all kBins - 1.
-        int used[kBins], m = 0;
-        for (int b = 0; b < kBins; ++b) {  // without a branch: which bins are empty is data
-          used[m] = b;
-          m += cnt[b] != 0;
-        }
-        float rightArea[kBins];
-        std::uint32_t rightCnt[kBins];
-        Box acc;
-        std::uint32_t c = 0;
-        for (int j = m - 1; j > 0; --j) {
-          acc.Extend(bins.BoxOf(a, used[j]));
-          c += cnt[used[j]];
-          rightArea[j] = acc.Area();
-          rightCnt[j] = c;
-        }
-        acc = Box{};
-        c = 0;
-        for (int j = 0; j < m - 1; ++j) {
-          acc.Extend(bins.BoxOf(a, used[j]));
-          c += cnt[used[j]];
-          float cost = acc.Area() * float(c) + rightArea[j + 1] * float(rightCnt[j + 1]);
-          if (cost < bestCost) {
-            bestCost = cost;
-            bestAxis = a;
-            bestSplit = used[j];
-          }
-        }
-      }
+      const ObjectSplit os = FindObjectSplit(refs.data() + begin, n, nb);
       const float parentArea = node->box.Area();
       const float leafCost = float(n);
-      const float splitCost = parentArea > 0.0f ? 1.0f + bestCost / parentArea : INFINITY;
-      if (bestAxis < 0 || (n <= static_cast<std::uint32_t>(maxLeaf) && leafCost <= splitCost)) {
+      const float splitCost = parentArea > 0.0f ? 1.0f + os.cost / parentArea : INFINITY;
+      if (os.axis < 0 || (n <= static_cast<std::uint32_t>(maxLeaf) && leafCost <= splitCost)) {
         if (n <= static_cast<std::uint32_t>(maxLeaf)) return leaf();
         mid = begin + n / 2;
         std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end, byCentroid(axis));
       } else {
-        const float s = scale[bestAxis];
-        auto it = std::partition(refs.begin() + begin, refs.begin() + end, [&](const PrimRef& r) {
-          int b = std::min(kBins - 1, static_cast<int>((r.Centroid()[bestAxis] - cb.lo[bestAxis]) * s));
-          return b <= bestSplit;
-        });
-        mid = static_cast<std::uint32_t>(it - refs.begin());
-        if (mid == begin || mid == end) mid = begin + n / 2;
+        mid = begin + PartitionObject(refs.data() + begin, n, cb, os);
       }
     }
     if (n > kParallelThreshold) {
@@ -274,19 +535,26 @@ void Store(const BuildNode& b, BVHNode& out)
 }
 
 // Depth-first flattening: children of node i go to two adjacent new slots.
-void Flatten(const BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, AccelInfo& info)
+// `refs`: where the leaves of a spatial-split build put their ids (else
+// null: the leaves already name their range of the builder's references).
+void Flatten(const BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, AccelInfo& info,
+             std::vector<std::uint32_t>* refs)
 {
   Store(b, nodes[self]);
   if (b.count > 0 || !b.kids[0]) {
     ++info.leaves;
+    if (refs) {
+      nodes[self].first = static_cast<std::uint32_t>(refs->size());
+      refs->insert(refs->end(), b.ids.begin(), b.ids.end());
+    }
     return;
   }
   const auto first = static_cast<std::uint32_t>(nodes.size());
   nodes.resize(nodes.size() + 2);
   nodes[self].first = first;
   nodes[self].count = 0;
-  Flatten(*b.kids[0], first, nodes, info);
-  Flatten(*b.kids[1], first + 1, nodes, info);
+  Flatten(*b.kids[0], first, nodes, info, refs);
+  Flatten(*b.kids[1], first + 1, nodes, info, refs);
 }
 
 }  // namespace
@@ -295,6 +563,10 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
 {
   if (params.bvhLeaf < 0 || params.bvhLeaf > 255)
     throw InputError(fmt::format("--bvh-leaf {} is not in 1..255", params.bvhLeaf));
+  const std::string& quality = params.bvhQuality;
+  if (!quality.empty() && quality != "medium" && quality != "high")
+    throw InputError(fmt::format("--bvh-quality '{}': expected medium or high", quality));
+  const bool spatial = quality == "high";
   Builder bld;
   bld.maxLeaf = params.bvhLeaf > 0 ? params.bvhLeaf : kDefaultLeaf;
   const std::uint32_t n = scene.NumUnified();
@@ -323,12 +595,26 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     info.bytes = sizeof(BVHNode);
     return out;
   }
-  std::unique_ptr<BuildNode> root = bld.Build(0, n, 0);
+  std::unique_ptr<BuildNode> root;
+  if (spatial) {
+    bld.scene = &scene;
+    bld.ranges = scene.Ranges();
+    Bounds2 all = bld.NodeBounds(bld.refs.data(), n);
+    bld.rootArea = all.box.Area();
+    root = bld.BuildSpatial(std::move(bld.refs), 0, kSplitBudget * double(n));
+  } else {
+    root = bld.Build(0, n, 0);
+  }
   out.nodes.reserve(bld.nodeCount.load());
   out.nodes.resize(1);
-  Flatten(*root, 0, out.nodes, info);
-  out.refs.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) out.refs[i] = bld.refs[i].Id();
+  if (spatial) {
+    out.refs.reserve(n + bld.splitRefs.load());
+    Flatten(*root, 0, out.nodes, info, &out.refs);
+  } else {
+    Flatten(*root, 0, out.nodes, info, nullptr);
+    out.refs.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) out.refs[i] = bld.refs[i].Id();
+  }
   out.header.nNodes = static_cast<std::uint32_t>(out.nodes.size());
   out.header.nRefs = static_cast<std::uint32_t>(out.refs.size());
   info.nodes = out.nodes.size();
@@ -336,6 +622,8 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   info.emptyLeaves = 0;
   info.bytes = out.nodes.size() * sizeof(BVHNode) + out.refs.size() * sizeof(std::uint32_t);
   info.params = fmt::format("leaf={} bins={}", bld.maxLeaf, kBins);
+  if (spatial)
+    info.params += fmt::format(" quality=high spatial_bins={} split_refs={}", kSpatialBins, bld.splitRefs.load());
   return out;
 }
 

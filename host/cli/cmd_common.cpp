@@ -1,4 +1,5 @@
 #include <charconv>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -16,8 +17,11 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
       ->capture_default_str();
   cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
   cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
-#define CR_CLI_ACCEL_PARAM(f, T, opt, help) \
-  cmd->add_option(opt, o.params.f, std::string(help) + " (0: default)")->check(CLI::NonNegativeNumber);
+#define CR_CLI_ACCEL_PARAM(f, T, opt, help)                                                        \
+  if constexpr (std::is_arithmetic_v<T>)                                                          \
+    cmd->add_option(opt, o.params.f, std::string(help) + " (0: default)")->check(CLI::NonNegativeNumber); \
+  else                                                                                            \
+    cmd->add_option(opt, o.params.f, std::string(help) + " (default: the first)");
   CR_ACCEL_PARAMS(CR_CLI_ACCEL_PARAM)
 #undef CR_CLI_ACCEL_PARAM
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");

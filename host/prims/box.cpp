@@ -59,6 +59,12 @@ Bounds FloatBounds(const Box& b)
   return out;
 }
 
+// Its box's two sides (the box itself is not cut).
+void SplitBounds(const Box& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
+{
+  SplitBox(Intersect(FloatBounds(p), box), axis, pos, left, right);
+}
+
 // The surface meets the cell iff the closed cell meets the closed box and
 // does not lie in the box's open interior. Exact.
 bool OverlapsBox(const Box& b, const glm::dvec3& lo, const glm::dvec3& hi)

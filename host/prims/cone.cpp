@@ -69,6 +69,12 @@ Bounds FloatBounds(const Cone& c)
   return b;
 }
 
+// Its box's two sides (the cone itself is not cut).
+void SplitBounds(const Cone& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
+{
+  SplitBox(Intersect(FloatBounds(p), box), axis, pos, left, right);
+}
+
 // A conservative test, tighter than the bounding box. The box (through its
 // bounding sphere) must meet the slab 0 <= s <= H along the axis, and its
 // centre's distance to the axis segment must lie in [rmin - R, rmax + R], R

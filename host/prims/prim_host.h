@@ -42,6 +42,10 @@ struct LocalSurface {
 //  FloatBounds    its float box, rounded outward (builders, Embree boxes);
 //  OverlapsBox    does its surface meet the box? exact or conservative, in
 //                 double (insertion into cells and octants);
+//  SplitBounds    its part inside `box` cut by the plane x[axis] = pos:
+//                 float boxes of the two sides, rounded outward, each within
+//                 box (the BVH's spatial splits; a side it does not reach:
+//                 empty);
 //  Scale          largest magnitude of its defining points (radii added):
 //                 the scale of a float intersector's rounding on it;
 //  SurfaceAt      the hit point near pApprox (with the hit's u, v) on its
@@ -60,6 +64,7 @@ struct LocalSurface {
   const char* PrimTypeName(PrimTag<T>);                                                                          \
   Bounds FloatBounds(const T& p);                                                                                \
   bool OverlapsBox(const T& p, const glm::dvec3& lo, const glm::dvec3& hi);                                     \
+  void SplitBounds(const T& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right);            \
   double Scale(const T& p);                                                                                      \
   LocalSurface SurfaceAt(const Scene& scene, const T& p, std::uint32_t local, const glm::dvec3& pApprox, double u, \
                          double v);                                                                              \
@@ -72,6 +77,23 @@ struct LocalSurface {
   bool ParseNff(PrimTag<T>, NffStatement& st, Scene& scene);
 CR_PRIM_TYPES(CR_PRIM_HOST_DECLS_)
 #undef CR_PRIM_HOST_DECLS_
+
+// a and b's common part (empty when they are disjoint).
+inline Bounds Intersect(const Bounds& a, const Bounds& b)
+{
+  Bounds r;
+  r.lo = glm::max(a.lo, b.lo);
+  r.hi = glm::min(a.hi, b.hi);
+  return r;
+}
+// SplitBounds of a type that splits only its box: box's two sides of the
+// plane.
+inline void SplitBox(const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
+{
+  left = right = box;
+  left.hi[axis] = std::min(box.hi[axis], pos);
+  right.lo[axis] = std::max(box.lo[axis], pos);
+}
 
 // Name of type k (CR_PRIM_*).
 const char* PrimTypeName(std::uint32_t k);

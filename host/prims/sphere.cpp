@@ -26,6 +26,12 @@ Bounds FloatBounds(const Sphere& s)
   return b;
 }
 
+// Its box's two sides (the sphere itself is not cut).
+void SplitBounds(const Sphere& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
+{
+  SplitBox(Intersect(FloatBounds(p), box), axis, pos, left, right);
+}
+
 // Arvo 1990 ("A simple method for box-sphere intersection testing"), hollow
 // form: the surface meets the box iff the nearest point of the box is inside
 // the sphere and the farthest is not (a box wholly inside the ball holds no

@@ -37,6 +37,61 @@ Bounds FloatBounds(const Triangle& t)
   return b;
 }
 
+// The largest float <= x and the smallest >= x (finite x).
+static float FloatDown(double x)
+{
+  const float f = static_cast<float>(x);
+  return double(f) <= x ? f : std::nextafter(f, -INFINITY);
+}
+static float FloatUp(double x)
+{
+  const float f = static_cast<float>(x);
+  return double(f) >= x ? f : std::nextafter(f, INFINITY);
+}
+
+// The triangle's two sides of the plane (Embree's splitTriangle): each
+// vertex goes to its side (both when on the plane), each edge that crosses
+// the plane adds its crossing point, computed in double, to both; each side's
+// box is widened by 2^-48 of the triangle's largest coordinate on the axis
+// (far above the crossing's double error), rounded outward to float, and
+// intersected with the box, whose own part of the triangle lies within.
+void SplitBounds(const Triangle& t, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
+{
+  const glm::dvec3 v[3] = {D3(t.v0), D3(t.v1), D3(t.v2)};
+  const double p = pos;
+  glm::dvec3 lo[2] = {glm::dvec3(INFINITY), glm::dvec3(INFINITY)};
+  glm::dvec3 hi[2] = {glm::dvec3(-INFINITY), glm::dvec3(-INFINITY)};
+  const auto add = [&](int side, const glm::dvec3& x) {
+    lo[side] = glm::min(lo[side], x);
+    hi[side] = glm::max(hi[side], x);
+  };
+  for (int i = 0; i < 3; ++i) {
+    const glm::dvec3& a = v[i];
+    const glm::dvec3& b = v[(i + 1) % 3];
+    if (a[axis] <= p) add(0, a);
+    if (a[axis] >= p) add(1, a);
+    if ((a[axis] < p && b[axis] > p) || (a[axis] > p && b[axis] < p)) {
+      glm::dvec3 x = a + (b - a) * ((p - a[axis]) / (b[axis] - a[axis]));
+      x[axis] = p;
+      add(0, x);
+      add(1, x);
+    }
+  }
+  const glm::dvec3 m = glm::max(glm::abs(v[0]), glm::max(glm::abs(v[1]), glm::abs(v[2]))) * 0x1.0p-48;
+  Bounds side[2];
+  for (int s = 0; s < 2; ++s) {
+    if (!(lo[s].x <= hi[s].x)) continue;  // no vertex or crossing on this side
+    for (int a = 0; a < 3; ++a) {
+      side[s].lo[a] = FloatDown(lo[s][a] - m[a]);
+      side[s].hi[a] = FloatUp(hi[s][a] + m[a]);
+    }
+  }
+  Bounds l, r;
+  SplitBox(box, axis, pos, l, r);
+  left = Intersect(side[0], l);
+  right = Intersect(side[1], r);
+}
+
 // Separating axis test (Akenine-Moller 2001, "Fast 3D triangle-box overlap
 // testing"): the 3 box normals, the triangle normal and the 9 edge cross
 // products. Degenerate triangles are tested against the axes that remain.
