@@ -8,6 +8,7 @@ that the registers allow. docs/OPENCL.md records its output and reads it.
 
   bench/gpu_compile.py [--mcpu gfx906] [--out DIR] [--jobs N] [--filter TEXT]
                        [--accels grid,octree,bvh] [--precisions fast,robust,fp64]
+                       [--type-sets T,ST,STC,all]
                        [--cold auto|call|inline] [--check-host BIN]
 
 A configuration is what host/cl/cl_options.cpp (ClBuildOptions) passes to a
@@ -158,7 +159,7 @@ def compile_one(clang, mcpu, bc, cfg, tmp):
 
 def configurations(args, types, accels):
     cfgs = []
-    sets = TYPE_SETS + [("all", list(types))]
+    sets = [x for x in TYPE_SETS + [("all", list(types))] if x[0] in args.type_sets]
     for accel, variant, (qname, anyhit, source), prec, (tname, tset) in itertools.product(
             [a for a in accels if a.lower() in args.accels], VARIANTS, QUERIES,
             [p for p in PRECISIONS if p in args.precisions], sets):
@@ -224,6 +225,8 @@ def main():
     ap.add_argument("--filter", default="", help="only configurations whose id contains this text")
     ap.add_argument("--accels", default="grid,octree,bvh")
     ap.add_argument("--precisions", default=",".join(PRECISIONS))
+    ap.add_argument("--type-sets", default="T,ST,STC,all",
+                    help="type sets compiled: T, ST, STC (the SPD scenes'), all (every type)")
     ap.add_argument("--cold", choices=["auto", "call", "inline"], default="auto",
                     help="cold paths as calls or inlined (auto: as the host builds them, calls unless "
                     "CELLRAY_CL_COLD=inline)")
@@ -235,6 +238,7 @@ def main():
     args = ap.parse_args()
     args.accels = args.accels.split(",")
     args.precisions = args.precisions.split(",")
+    args.type_sets = args.type_sets.split(",")
     clang = find_clang()
     missing = SKIP if args.skip_missing else 2
     if not clang:

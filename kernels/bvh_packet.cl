@@ -131,7 +131,7 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
      * publish the leaf's references to test if any lane entered it. */
     if (lid == 0) {
       uint nIn = 0, nVote = 0, nLive = 0;
-      for (uint k = 0; k < nLanes; ++k) {
+      CR_ROLLED for (uint k = 0; k < nLanes; ++k) {
         const uint f = sLane[k];
         nIn += f & 1u;
         nVote += (f >> 1) & 1u;

@@ -142,7 +142,7 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
      * node, publish the leaf's references if some lane entered it. */
     if (lid == 0) {
       uint any = 0u, nIn = 0u, nLive = 0u, nVoters = 0u, neg[3] = {0u, 0u, 0u};
-      for (uint k = 0; k < nLanes; ++k) {
+      CR_ROLLED for (uint k = 0; k < nLanes; ++k) {
         const uint f = sLane[k];
         any |= f & 0xFFu;
         nIn += (f >> 8) & 1u;

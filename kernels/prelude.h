@@ -90,10 +90,17 @@ inline uint cr_minu(uint a, uint b) { return a < b ? a : b; }
  * OpenCL, where PoCL compiles with -unroll-threshold=1, so that a rolled
  * loop would stay a loop inside the work-item loop and keep PoCL from
  * vectorising it. C++ compilers unroll such loops by themselves. */
+/* CR_ROLLED: before a group-sized loop run by one work-item (the packet
+ * traversals' reductions over the lanes' verdicts): kept a loop. PoCL rolls
+ * it anyway; clang for a GPU unrolled the 64 lanes' loads into registers
+ * (gfx906: 77 VGPRs for the BVH packet kernel in fast mode, 36 rolled:
+ * docs/OPENCL.md, the GPU compile table). */
 #ifdef CR_OPENCL
 #define CR_UNROLL _Pragma("unroll")
+#define CR_ROLLED _Pragma("unroll 1")
 #else
 #define CR_UNROLL
+#define CR_ROLLED
 #endif
 
 /* v[k] for an axis k in {0, 1, 2} computed at run time: selects in OpenCL,

@@ -105,7 +105,7 @@ TEST_CASE("bvh: with spatial splits every backend answers as with object splits,
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Random}) {
       const bool occlusion = test::IsOcclusion(kind);
-      const auto rays = test::MakeRays(scene, kind, 48);
+      const auto rays = test::MakeRays(scene, kind, 32);
       for (Backend backend : {Backend::Scalar, Backend::Simd}) {
         for (const char* variant : {"", "single"}) {
           if (backend == Backend::Scalar && *variant) continue;

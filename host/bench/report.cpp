@@ -44,6 +44,12 @@ bool OursRobust(const json& r)
 std::string Sci(double x) { return x == 0.0 ? "0" : fmt::format("{:.1e}", x); }
 std::string F(double x, int digits = 2) { return fmt::format("{:.{}f}", x, digits); }
 std::string MiB(double bytes) { return fmt::format("{:.2f}", bytes / (1024.0 * 1024.0)); }
+// The structure's bytes per primitive (its arrays over the scene's pieces).
+std::string BytesPerPrim(const json& r)
+{
+  const double n = Num(r, "pieces");
+  return n > 0.0 ? fmt::format("{:.0f}", Num(r, "bytes") / n) : std::string("–");
+}
 
 std::vector<std::string> Ordered(const json& rows, const char* key, bool (*keep)(const json&) = nullptr)
 {
@@ -171,9 +177,9 @@ std::string SpeedErrorTable(const json& rows)
 std::string FullTable(const json& rows, const char* title)
 {
   std::string s = fmt::format(
-      "## {}\n\n| scene | rays | n | configuration | ran as | build ms | MiB | Mrays/s (min–max) | IT/ray | TS/ray | "
-      "leaves/ray | empty/ray | wrong | max rel. t err | note |\n"
-      "| --- | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
+      "## {}\n\n| scene | rays | n | configuration | ran as | build ms | MiB | B/prim | Mrays/s (min–max) | IT/ray | "
+      "TS/ray | leaves/ray | empty/ray | wrong | max rel. t err | note |\n"
+      "| --- | --- | ---: | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
       title);
   for (const auto& r : rows) {
     std::string speed = "–";
@@ -194,9 +200,10 @@ std::string FullTable(const json& rows, const char* title)
     }
     std::string note = Str(r, "note");
     std::replace(note.begin(), note.end(), '|', '/');
-    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", Str(r, "scene"),
-                     Str(r, "kind"), Num(r, "rays"), Str(r, "label"), Str(r, "variant_ran"), F(Num(r, "build_ms"), 1),
-                     MiB(Num(r, "bytes")), speed, it, ts, lv, el, wrong, rel, note);
+    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                     Str(r, "scene"), Str(r, "kind"), Num(r, "rays"), Str(r, "label"), Str(r, "variant_ran"),
+                     F(Num(r, "build_ms"), 1), MiB(Num(r, "bytes")), BytesPerPrim(r), speed, it, ts, lv, el, wrong,
+                     rel, note);
   }
   return s + "\n";
 }
@@ -243,8 +250,9 @@ std::string ScalingTable(const json& sc)
       "## Scaling with scene size\n\nBuild time, memory (the structure's arrays; peak RSS of the process while that "
       "configuration was built and traced) and time per ray (median) for primary and diffuse rays; IT / TS: "
       "intersection tests and traversal steps per ray.\n\n"
-      "| scene | primitives | configuration | build ms | MiB | peak RSS MiB | primary ns/ray | diffuse ns/ray | primary IT / TS | diffuse IT / TS | note |\n"
-      "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
+      "| scene | primitives | configuration | build ms | MiB | B/prim | peak RSS MiB | primary ns/ray | diffuse ns/ray | "
+      "primary IT / TS | diffuse IT / TS | note |\n"
+      "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
   auto ns = [](const json& r) {
     if (!r.is_object() || !Timed(r) || Mrays(r) <= 0.0) return std::string("–");
     return F(1e3 / Mrays(r), 1);
@@ -256,9 +264,10 @@ std::string ScalingTable(const json& sc)
   for (const auto& k : keys) {
     const Cell& c = cells[k];
     std::string note = Str(c.any, "note");
-    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", k.first, Num(c.any, "pieces"), k.second,
-                     F(Num(c.any, "build_ms"), 1), MiB(Num(c.any, "bytes")), MiB(Num(c.any, "peak_rss_bytes")),
-                     ns(c.primary), ns(c.diffuse), itts(c.primary), itts(c.diffuse), note);
+    s += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", k.first, Num(c.any, "pieces"),
+                     k.second, F(Num(c.any, "build_ms"), 1), MiB(Num(c.any, "bytes")), BytesPerPrim(c.any),
+                     MiB(Num(c.any, "peak_rss_bytes")), ns(c.primary), ns(c.diffuse), itts(c.primary), itts(c.diffuse),
+                     note);
   }
   return s + "\n";
 }
