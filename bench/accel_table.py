@@ -78,9 +78,11 @@ def main():
   too, each reference cut at the planes it straddles (a triangle at its exact crossing, `SplitBounds` in
   `host/prims/`, rounded outward; other types by their box), and the spatial split wins where its SAH
   cost is lower, within 30% extra references shared among subtrees by size (the tree does not depend on
-  the threads). Measured on this machine: builds take 4-20x as long (gears 20 -> 330 ms, sponza 34 ->
-  340-760 ms, conference 170 -> 680 ms) with 5-43% more references; traversal steps per primary ray
-  (scalar, 256²) fall from 20.5 to 18.9 on gears and from 43.8 to 34.9 on sponza; but SIMD trace time
+  the threads). Measured on this machine: builds take 4-22x as long (gears 20 -> 330 ms, sponza 34 ->
+  340-760 ms, conference 170 -> 680 ms; a generated 10^6-triangle mesh 0.43 -> 2.77 s with no split
+  made: the spatial binning is paid wherever children overlap) with 0-21% more references; traversal
+  steps per primary ray (scalar, 256²) fall from 20.5 to 18.9 on gears and from 43.8 to 34.9 on
+  sponza; but SIMD trace time
   (`bench/ab_speed.py`, one thread, 3 rounds, sponza, conference, sibenik, gears, teapot, bunny, balls x
   primary, shadow, diffuse x single, packet) is 1.006 of the default's in geometric mean: sponza 0.83-1.00,
   sibenik primary 0.88-0.91, gears primary 0.83 (single), conference 1.03-2.54 (its shadow rays, from
