@@ -33,7 +33,8 @@ constexpr std::uint32_t kParallelThreshold = 4096;
 // kSplitBudget x the primitives in extra references, shared among subtrees
 // in proportion to their sizes (so the tree does not depend on the order
 // in which threads consume it).
-constexpr int kSpatialBins = 16;
+constexpr int kSpatialBins = 16;  // <= kBins (SahSweep's arrays)
+static_assert(kSpatialBins <= kBins);
 constexpr float kSplitAlpha = 1e-5f;
 constexpr double kSplitBudget = 0.3;
 
@@ -164,6 +165,33 @@ struct Builder {
         });
   }
 
+  // The SAH sweep over m bins in order: boxOf(j) the bin's box, leftN(j)
+  // the references it adds to the left side, rightN(j) those it adds to the
+  // right side; take(j, cost) for each split after bin j with references on
+  // both sides, left to right (cost without the parent's area).
+  template <class BoxOf, class LeftN, class RightN, class Take>
+  static void SahSweep(int m, BoxOf boxOf, LeftN leftN, RightN rightN, Take take)
+  {
+    float rightArea[kBins];
+    std::uint32_t rightCnt[kBins];
+    Box acc;
+    std::uint32_t c = 0;
+    for (int j = m - 1; j > 0; --j) {
+      acc.Extend(boxOf(j));
+      c += rightN(j);
+      rightArea[j] = acc.Area();
+      rightCnt[j] = c;
+    }
+    acc = Box{};
+    c = 0;
+    for (int j = 0; j < m - 1; ++j) {
+      acc.Extend(boxOf(j));
+      c += leftN(j);
+      if (c == 0 || rightCnt[j + 1] == 0) continue;
+      take(j, acc.Area() * float(c) + rightArea[j + 1] * float(rightCnt[j + 1]));
+    }
+  }
+
   // The best binned-SAH object split of refs[begin, end) over the three
   // axes (cost without the parent's area; axis -1: none), with the boxes of
   // its two sides (the spatial-split test measures their overlap).
@@ -208,28 +236,16 @@ struct Builder {
         used[m] = b;
         m += cnt[b] != 0;
       }
-      float rightArea[kBins];
-      std::uint32_t rightCnt[kBins];
-      Box acc;
-      std::uint32_t c = 0;
-      for (int j = m - 1; j > 0; --j) {
-        acc.Extend(bins.BoxOf(a, used[j]));
-        c += cnt[used[j]];
-        rightArea[j] = acc.Area();
-        rightCnt[j] = c;
-      }
-      acc = Box{};
-      c = 0;
-      for (int j = 0; j < m - 1; ++j) {
-        acc.Extend(bins.BoxOf(a, used[j]));
-        c += cnt[used[j]];
-        float cost = acc.Area() * float(c) + rightArea[j + 1] * float(rightCnt[j + 1]);
-        if (cost < best.cost) {
-          best.cost = cost;
-          best.axis = a;
-          best.split = used[j];
-        }
-      }
+      const auto count = [&](int j) { return cnt[used[j]]; };
+      SahSweep(
+          m, [&](int j) { return bins.BoxOf(a, used[j]); }, count, count,
+          [&](int j, float cost) {
+            if (cost < best.cost) {
+              best.cost = cost;
+              best.axis = a;
+              best.split = used[j];
+            }
+          });
     }
     if (best.axis >= 0) {
       best.scale = scale[best.axis];
@@ -345,29 +361,16 @@ struct Builder {
     SpatialSplit best;
     for (int a = 0; a < 3; ++a) {
       if (ext[a] <= 0.0f) continue;
-      float rightArea[kSpatialBins];
-      std::uint32_t rightCnt[kSpatialBins];
-      Box acc;
-      std::uint32_t c = 0;
-      for (int k = kSpatialBins - 1; k > 0; --k) {
-        acc.Extend(sb.box[a][k]);
-        c += sb.exit[a][k];
-        rightArea[k] = acc.Area();
-        rightCnt[k] = c;
-      }
-      acc = Box{};
-      c = 0;
-      for (int k = 0; k < kSpatialBins - 1; ++k) {
-        acc.Extend(sb.box[a][k]);
-        c += sb.enter[a][k];
-        if (c == 0 || rightCnt[k + 1] == 0) continue;
-        const float cost = acc.Area() * float(c) + rightArea[k + 1] * float(rightCnt[k + 1]);
-        if (cost < best.cost) {
-          best.cost = cost;
-          best.axis = a;
-          best.pos = Plane(box, a, k + 1);
-        }
-      }
+      SahSweep(
+          kSpatialBins, [&](int k) { return sb.box[a][k]; }, [&](int k) { return sb.enter[a][k]; },
+          [&](int k) { return sb.exit[a][k]; },
+          [&](int k, float cost) {
+            if (cost < best.cost) {
+              best.cost = cost;
+              best.axis = a;
+              best.pos = Plane(box, a, k + 1);
+            }
+          });
     }
     return best;
   }
@@ -470,13 +473,10 @@ struct Builder {
   {
     auto node = std::make_unique<BuildNode>();
     ++nodeCount;
-    Bounds2 nb;
-    Reduce(nb, begin, end, [&](Bounds2& acc, std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t i = b; i < e; ++i) acc.Add(refs[i]);
-    });
+    const std::uint32_t n = end - begin;
+    const Bounds2 nb = NodeBounds(refs.data() + begin, n);
     node->box = nb.box;
     const Box& cb = nb.cb;
-    const std::uint32_t n = end - begin;
     auto leaf = [&]() {
       node->first = begin;
       node->count = n;
