@@ -29,7 +29,9 @@
 #else
 #define CR_WITH_GRID 0
 #endif
-#if CR_WITH_GRID
+/* The walk (Grid_Plane .. Grid_Walk) also serves the two-level grid's two
+ * levels (kernels/grid2.h). */
+#if CR_WITH_GRID || defined(CR_ACCEL_GRID2)
 
 /* Plane i (0..res[axis]) of the grid along `axis`. Computed in float in every
  * precision mode: the builder (host/accel/grid_builder.cpp) and the fp32 and
@@ -42,12 +44,13 @@ CR_FUNC real Grid_Plane(CR_GLOBAL const GridHeader* g, int axis, int i)
   return (real)p;
 }
 
-/* The walk's first cell: 0 when the ray misses the grid box within
- * [tmin, tMax], else 1 with the cell the ray enters the box in. */
-CR_FUNC int Grid_Enter(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tMax, int cell[3])
+/* The cell of the grid the ray is in at parameter tEnter, a parameter at
+ * which it lies in the grid box (up to rounding): the first guess from the
+ * point there, then corrected until it is consistent with the plane
+ * parameters the walk uses (its entry planes at or before tEnter, its exit
+ * planes at or after it, where the grid's bounds allow). */
+CR_FUNC void Grid_EnterAt(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tEnter, int cell[3])
 {
-  real tEnter;
-  if (!Box_Intersect(grid->bmin, grid->bmax, ray, ray->tmin, tMax, &tEnter)) return 0;
   CR_UNROLL for (int a = 0; a < 3; ++a) {
     const int res = (int)grid->res[a];
     /* First guess from the entry point (the conservative box test may put it
@@ -68,7 +71,21 @@ CR_FUNC int Grid_Enter(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tM
     }
     cell[a] = c;
   }
+}
+
+/* The walk's first cell: 0 when the ray misses the grid box within
+ * [tmin, tMax], else 1 with the cell the ray enters the box in and its
+ * entry parameter. */
+CR_FUNC int Grid_EnterT(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tMax, int cell[3], real* tEnter)
+{
+  if (!Box_Intersect(grid->bmin, grid->bmax, ray, ray->tmin, tMax, tEnter)) return 0;
+  Grid_EnterAt(grid, ray, *tEnter, cell);
   return 1;
+}
+CR_FUNC int Grid_Enter(CR_GLOBAL const GridHeader* grid, const Ray* ray, real tMax, int cell[3])
+{
+  real tEnter;
+  return Grid_EnterT(grid, ray, tMax, cell, &tEnter);
 }
 
 /* Index of a cell in cellStart. */
@@ -81,9 +98,10 @@ CR_FUNC uint Grid_CellIndex(CR_GLOBAL const GridHeader* grid, const int cell[3])
  * 0 when the walk ends (the closest hit so far, hitT, or tmax lies at or
  * before the cell's exit, or the exit face is the grid's), else 1 with
  * `cell` moved to the neighbour across the exit face. `cell` is left as it
- * was when the walk ends. Straight-line code (selects, no indexing by a
+ * was when the walk ends; *tExitOut is the cell's exit parameter (the next
+ * cell's entry) either way. Straight-line code (selects, no indexing by a
  * computed axis) so that a packet's lanes can run it side by side. */
-CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3])
+CR_FUNC int Grid_Step(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3], real* tExitOut)
 {
   /* Exit face: the smallest crossing parameter of the three exit planes. */
   int axis = 0;
@@ -98,6 +116,7 @@ CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hit
   }
   /* hitT is the closest hit so far, or tmax: either way nothing farther can
    * beat it once the walk has passed it. */
+  *tExitOut = tExit;
   if (hitT <= tExit) return 0;
   int next[3];
   int inside = 1;
@@ -111,14 +130,19 @@ CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hit
   return 1;
 }
 
-/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
- * grid; `hit` must come from Hit_Init. */
-CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart, CR_GLOBAL const uint* refs,
-                        const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+/* Grid_Step without the exit parameter: the walk of the uniform grid. */
+CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3])
 {
-  if (grid->nRefs == 0u) return;
-  int cell[3];
-  if (!Grid_Enter(grid, ray, hit->t, cell)) return;
+  real tExit;
+  return Grid_Step(grid, ray, hitT, cell, &tExit);
+}
+
+/* The walk from cell `cell` (not yet tested) on, testing each cell's
+ * references refs[cellStart[i] .. cellStart[i + 1]); 1 when an any-hit query
+ * (anyHit) is answered. */
+CR_FUNC int Grid_Walk(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart, CR_GLOBAL const uint* refs,
+                      const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, int cell[3], TraceStats* st)
+{
   do {
     CR_COUNT(st, nTS);
     CR_COUNT(st, nLeaves);
@@ -128,9 +152,24 @@ CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* 
     if (begin == end) CR_COUNT(st, nEmptyLeaves);
     for (uint i = begin; i < end; ++i) {
       CR_COUNT(st, nIT);
-      if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return;
+      if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return 1;
     }
   } while (Grid_Next(grid, ray, hit->t, cell));
+  return 0;
+}
+
+#endif /* the walk */
+#if CR_WITH_GRID
+
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
+ * grid; `hit` must come from Hit_Init. */
+CR_FUNC void Grid_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* cellStart, CR_GLOBAL const uint* refs,
+                        const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+{
+  if (grid->nRefs == 0u) return;
+  int cell[3];
+  if (!Grid_Enter(grid, ray, hit->t, cell)) return;
+  (void)Grid_Walk(grid, cellStart, refs, pv, ray, hit, anyHit, cell, st);
 }
 
 #endif /* CR_WITH_GRID */

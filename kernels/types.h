@@ -130,7 +130,8 @@ CR_FUNC uint Prim_Count(const PrimRanges* r, uint k) { return r->begin[k + 1u] -
 #define CR_ACCEL_TYPES(X)                                      \
   X(Grid, GRID, grid, GridHeader, uint)                        \
   X(Octree, OCTREE, octree, OctreeHeader, OctreeNode)          \
-  X(BVH, BVH, bvh, BVHHeader, BVHNode)
+  X(BVH, BVH, bvh, BVHHeader, BVHNode)                         \
+  X(Grid2, GRID2, grid2, GridHeader, GridHeader)
 #define CR_ACCEL_ID_(N, U, l, H, Nd) CR_ACCEL_ID_##U,
 enum { CR_ACCEL_TYPES(CR_ACCEL_ID_) CR_NUM_ACCEL_TYPES };
 #undef CR_ACCEL_ID_
@@ -157,14 +158,16 @@ typedef struct {
  * x + res[0] * (y + res[1] * z); its references are
  * refs[cellStart[i] .. cellStart[i + 1]) (compressed row layout, nCells + 1
  * offsets). Cell planes are bmin + i * cellSize, computed only by
- * Grid_Plane() so builder and traversal agree to the bit. */
+ * Grid_Plane() so builder and traversal agree to the bit. Also the top grid
+ * and each sub-grid of the two-level grid (kernels/grid2.h), where `first`
+ * tells where a sub-grid's cell offsets begin in refs (0 elsewhere). */
 typedef struct {
   float bmin[3];
   uint nCells;
   float bmax[3];
   uint nRefs;
   float cellSize[3];
-  uint pad0;
+  uint first;
   uint res[3];
   uint pad1;
 } GridHeader;

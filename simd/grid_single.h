@@ -41,7 +41,7 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
       Hit_Init(&hit, &ray);
       if ((in >> l) & 1u) {
         const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-        GridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, job.occlusion, st);
+        GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, ray, hit, first, job.occlusion, st);
       }
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }

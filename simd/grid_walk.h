@@ -26,11 +26,12 @@ CR_SIMD_INLINE vfloat<N> GridPlaneN(const GridHeader& g, int axis, vint<N> i)
 // (kernels/grid.h Grid_Trace before its loop).
 template <int N, bool kFast>
 CR_SIMD_INLINE vbool<N> GridPacket_Enter(const GridHeader& g, const RayPacket<N>& P, const HitPacket<N>& H,
-                                         vbool<N> active, vint<N> cell[3])
+                                         vbool<N> active, vint<N> cell[3], vfloat<N>* tEnterOut = nullptr)
 {
   vfloat<N> tEnter;
   const vbool<N> in =
       active & Box_IntersectRays<kFast, N>(g.bmin, g.bmax, P.org, P.inv, P.invNeg, P.tmin, H.t, tEnter);
+  if (tEnterOut) *tEnterOut = tEnter;
   if (None(in)) return in;
   const vint<N> one(1), zero(0);
   for (int a = 0; a < 3; ++a) {
@@ -71,16 +72,39 @@ CR_SIMD_INLINE vbool<N> GridPacket_Enter(const GridHeader& g, const RayPacket<N>
   return in;
 }
 
-// The walk of one ray from cell `first` (not yet tested) on; `hit` from
-// Hit_Init or the hit so far. The walk keeps the crossing parameter of each
-// axis's next plane and recomputes only the axis it stepped: the other two
-// planes have not changed, so their parameters are the scalar loop's
-// recomputed values, bit for bit.
-template <unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], int anyHit,
-                                    TraceStatsSum& st)
+// Grid_EnterAt of kernels/grid.h for one ray: the cell of grid g the ray is
+// in at parameter tEnter, corrected to the plane parameters of the walk.
+CR_SIMD_INLINE void GridSingle_EnterAt(const GridHeader& g, const Ray& ray, float tEnter, int cell[3])
 {
-  const GridHeader& g = *sc.gridHeader;
+  for (int a = 0; a < 3; ++a) {
+    const int res = static_cast<int>(g.res[a]);
+    const float p = ray.org[a] + tEnter * ray.dir[a];
+    float rel = (p - GridPlane(g, a, 0)) / g.cellSize[a];
+    rel = __builtin_fminf(__builtin_fmaxf(rel, 0.0f), static_cast<float>(res - 1));
+    int c = static_cast<int>(__builtin_floorf(rel));
+    auto planeT = [&](int i) { return PlaneT(GridPlane(g, a, i), ray.org[a], ray.inv[a]); };
+    if (!(ray.inv[a] < 0.0f)) {
+      while (c > 0 && planeT(c) > tEnter) --c;
+      while (c < res - 1 && planeT(c + 1) < tEnter) ++c;
+    } else {
+      while (c < res - 1 && planeT(c + 1) > tEnter) ++c;
+      while (c > 0 && planeT(c) < tEnter) --c;
+    }
+    cell[a] = c;
+  }
+}
+
+// The walk of one ray through grid g (cell offsets cellStart, references
+// refs) from cell `first` (not yet tested) on; `hit` from Hit_Init or the
+// hit so far; true when an any-hit query is answered. The walk keeps the
+// crossing parameter of each axis's next plane and recomputes only the axis
+// it stepped: the other two planes have not changed, so their parameters
+// are the scalar loop's recomputed values, bit for bit.
+template <unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE bool GridSingle_Walk(const KernelScene& sc, const GridHeader& g, const std::uint32_t* cellStart,
+                                    const std::uint32_t* refs, const Ray& ray, Hit& hit, const int first[3],
+                                    int anyHit, TraceStatsSum& st)
+{
   PackRay<4> pr;
   PackRay_Init<4>(pr, ray);
   pr.anyHit = anyHit != 0;
@@ -102,20 +126,20 @@ CR_SIMD_INLINE void GridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& 
       ++st.nTS;
       ++st.nLeaves;
     }
-    const std::uint32_t begin = sc.gridNodes[idx], end = sc.gridNodes[idx + 1];
+    const std::uint32_t begin = cellStart[idx], end = cellStart[idx + 1];
     if (begin == end) {
       if constexpr (kStats) ++st.nEmptyLeaves;
-    } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.gridRefs, begin, end, pr, hit, anyHit, st) && anyHit) {
-      return;
+    } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st) && anyHit) {
+      return true;
     }
     // Exit face: the smallest crossing, x before y before z on ties (the
     // scalar loop's strict <; no crossing is NaN), chosen without branches,
     // which incoherent rays would mispredict.
     const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
     const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
-    if (hit.t <= tNext[axis]) return;
+    if (hit.t <= tNext[axis]) return false;
     cell[axis] += step[axis];
-    if (static_cast<unsigned>(cell[axis]) >= static_cast<unsigned>(res[axis])) return;
+    if (static_cast<unsigned>(cell[axis]) >= static_cast<unsigned>(res[axis])) return false;
     idx += static_cast<std::uint32_t>(dIdx[axis]);
     tNext[axis] =
         PlaneT(GridPlane(g, axis, step[axis] > 0 ? cell[axis] + 1 : cell[axis]), ray.org[axis], ray.inv[axis]);

@@ -97,7 +97,8 @@ TEST_CASE("bench --quick on one scene: files, Embree rows, 0 wrong in robust row
       CHECK(r["per_ray"].is_object());  // statistics run of our backends
     }
   }
-  CHECK(robustRows == 6 * 4);  // simd and scalar x grid, octree, bvh x 4 kinds
+  // simd and scalar x every structure x 4 kinds
+  CHECK(robustRows == 2 * int(std::size(kAccelKinds)) * 4);
   if (EmbreeAvailable()) {
     for (const char* kind : {"primary", "shadow", "diffuse", "random"}) {
       CHECK(embreeLabels.count(std::string("embree single/") + kind) == 1);
@@ -133,7 +134,8 @@ TEST_CASE("bench: configurations planned by default and from lists")
   const auto all = bench::PlanCombos(o, true, true);
   std::set<std::string> labels;
   for (const auto& c : all) labels.insert(c.Label());
-  for (const char* l : {"simd grid", "simd octree", "simd bvh", "opencl grid", "opencl bvh", "scalar bvh fast",
+  for (const char* l : {"simd grid", "simd octree", "simd bvh", "simd grid2", "opencl grid", "opencl bvh",
+                        "opencl grid2", "scalar bvh fast",
                         "scalar bvh fp64", "simd bvh fast", "opencl bvh fp64"})
     CHECK(labels.count(l) == 1);
   CHECK(labels.count("embree packet8") == (EmbreeAvailable() ? 1u : 0u));

@@ -15,171 +15,13 @@
 #include <tbb/parallel_for.h>
 
 #include "host/accel/accel.h"
+#include "host/accel/grid_build.h"
 #include "host/prims/prim_host.h"
 #include "host/core/error.h"
 
 namespace cr {
 
-namespace grid_plane {
-// Grid_Plane() of the kernel, the one definition of the cell planes.
-#include "kernels/grid.h"
-}  // namespace grid_plane
-
-namespace {
-
-// Cells per primitive when --grid-density is 0: the best overall value of
-// bench/grid_density_sweep.sh (SPD scenes, primary and shadow rays, scalar
-// backend, one thread) in three runs out of three, geometric mean of
-// time / best 1.13-1.21 against 1.23-1.37 for 4 and 1.22-1.30 for 8. Scenes
-// with a small object on a large ground (tree, balls) want more cells, the
-// compact ones 2 to 8.
-constexpr double kDefaultDensity = 16.0;
-constexpr double kMaxDensity = 1024.0;
-constexpr int kMaxResAxis = 4096;
-constexpr std::uint64_t kMaxCells = std::uint64_t(1) << 28;  // cellStart: 1 GiB
-constexpr std::uint64_t kMaxRefs = std::uint64_t(1) << 29;   // refs: 2 GiB
-// A cell range larger than this is filled by a nested parallel loop (a huge
-// ground polygon must not serialise the build).
-constexpr std::uint64_t kNestedCells = 4096;
-
-struct Res {
-  int r[3] = {1, 1, 1};
-  std::uint64_t Cells() const { return std::uint64_t(r[0]) * std::uint64_t(r[1]) * std::uint64_t(r[2]); }
-};
-
-// Woo / Klimaszewski: res_a = extent_a * cbrt(lambda N / volume). An axis of
-// zero extent (a flat scene) or one that would get less than half a cell
-// gets res 1, and the others share the cells: the 2D area or 1D length
-// replaces the volume.
-Res ChooseResolution(const glm::dvec3& ext, double cells)
-{
-  bool active[3];
-  for (int a = 0; a < 3; ++a) active[a] = ext[a] > 0.0;
-  Res res;
-  for (int pass = 0; pass < 3; ++pass) {
-    int k = 0;
-    double measure = 1.0;
-    for (int a = 0; a < 3; ++a)
-      if (active[a]) {
-        ++k;
-        measure *= ext[a];
-      }
-    if (k == 0) return res;
-    const double s = std::pow(cells / measure, 1.0 / k);
-    bool changed = false;
-    for (int a = 0; a < 3; ++a)
-      if (active[a] && ext[a] * s < 0.5) {
-        active[a] = false;
-        changed = true;
-      }
-    if (changed) continue;
-    for (int a = 0; a < 3; ++a) {
-      const double r = active[a] ? std::round(ext[a] * s) : 1.0;
-      res.r[a] = int(std::clamp(r, 1.0, double(kMaxResAxis)));
-    }
-    return res;
-  }
-  return res;
-}
-
-float RoundDown(double x)
-{
-  float f = float(x);
-  return double(f) > x ? std::nextafter(f, -INFINITY) : f;
-}
-
-// The header for box [lo, hi] at resolution res: cellSize rounded up until
-// the last plane covers hi; bmax is that plane, so the box the traversal
-// clips against and the planes it walks agree.
-GridHeader MakeHeader(const glm::vec3& lo, const glm::dvec3& hi, const Res& res)
-{
-  GridHeader h{};
-  for (int a = 0; a < 3; ++a) {
-    h.bmin[a] = lo[a];
-    h.res[a] = std::uint32_t(res.r[a]);
-    float cs = float((hi[a] - double(lo[a])) / res.r[a]);
-    if (!(cs > 0.0f)) cs = std::numeric_limits<float>::min();
-    h.cellSize[a] = cs;
-    while (double(grid_plane::Grid_Plane(&h, a, res.r[a])) < hi[a])
-      h.cellSize[a] = std::nextafter(h.cellSize[a], INFINITY);
-    h.bmax[a] = grid_plane::Grid_Plane(&h, a, res.r[a]);
-  }
-  h.nCells = std::uint32_t(res.Cells());
-  return h;
-}
-
-// Cells [first, last] on `axis` whose slab, enlarged by eps, meets [lo, hi].
-void CellRange(const GridHeader& h, int axis, double lo, double hi, double eps, int& first, int& last)
-{
-  const int n = int(h.res[axis]);
-  auto plane = [&](int i) { return double(grid_plane::Grid_Plane(&h, axis, i)); };
-  auto guess = [&](double x) {
-    double r = std::floor((x - double(h.bmin[axis])) / double(h.cellSize[axis]));
-    return int(std::clamp(r, 0.0, double(n - 1)));
-  };
-  first = guess(lo - eps);
-  while (first > 0 && plane(first) + eps >= lo) --first;
-  while (first < n - 1 && plane(first + 1) + eps < lo) ++first;
-  last = guess(hi + eps);
-  while (last < n - 1 && plane(last + 1) - eps <= hi) ++last;
-  while (last > 0 && plane(last) - eps > hi) --last;
-}
-
-struct Builder {
-  explicit Builder(const Scene& s) : scene(s), ranges(s.Ranges()) {}
-  const Scene& scene;
-  const PrimRanges ranges;
-  GridHeader header{};
-  double eps = 0.0;
-  std::vector<Bounds> boxes;
-
-  // Calls visit(cell) for every cell primitive g overlaps.
-  template <class Visit>
-  void ForEachCell(std::uint32_t g, const Visit& visit) const
-  {
-    int first[3], last[3];
-    for (int a = 0; a < 3; ++a) CellRange(header, a, boxes[g].lo[a], boxes[g].hi[a], eps, first[a], last[a]);
-    auto slice = [&](int z) {
-      glm::dvec3 lo, hi;
-      lo.z = double(grid_plane::Grid_Plane(&header, 2, z)) - eps;
-      hi.z = double(grid_plane::Grid_Plane(&header, 2, z + 1)) + eps;
-      for (int y = first[1]; y <= last[1]; ++y) {
-        lo.y = double(grid_plane::Grid_Plane(&header, 1, y)) - eps;
-        hi.y = double(grid_plane::Grid_Plane(&header, 1, y + 1)) + eps;
-        for (int x = first[0]; x <= last[0]; ++x) {
-          lo.x = double(grid_plane::Grid_Plane(&header, 0, x)) - eps;
-          hi.x = double(grid_plane::Grid_Plane(&header, 0, x + 1)) + eps;
-          if (PrimOverlapsBox(scene, ranges, g, lo, hi))
-            visit(std::uint32_t(x) + header.res[0] * (std::uint32_t(y) + header.res[1] * std::uint32_t(z)));
-        }
-      }
-    };
-    const std::uint64_t volume = std::uint64_t(last[0] - first[0] + 1) * std::uint64_t(last[1] - first[1] + 1) *
-                                 std::uint64_t(last[2] - first[2] + 1);
-    if (volume > kNestedCells && last[2] > first[2]) {
-      tbb::parallel_for(first[2], last[2] + 1, [&](int z) { slice(z); });
-    } else {
-      for (int z = first[2]; z <= last[2]; ++z) slice(z);
-    }
-  }
-
-  // Per-cell counts into count[0..nCells); returns the total.
-  std::uint64_t Count(std::vector<std::uint32_t>& count) const
-  {
-    const auto n = static_cast<std::uint32_t>(boxes.size());
-    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n), [&](const tbb::blocked_range<std::uint32_t>& r) {
-      for (std::uint32_t g = r.begin(); g != r.end(); ++g)
-        ForEachCell(g, [&](std::uint32_t c) {
-          std::atomic_ref<std::uint32_t>(count[c]).fetch_add(1, std::memory_order_relaxed);
-        });
-    });
-    std::uint64_t total = 0;  // a cell holds at most n < 2^32 references
-    for (std::uint32_t k : count) total += k;
-    return total;
-  }
-};
-
-}  // namespace
+using namespace gridbuild;
 
 GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& info)
 {
@@ -213,41 +55,14 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   Builder b(scene);
   b.boxes.resize(n);
   tbb::parallel_for(std::uint32_t(0), n, [&](std::uint32_t g) { b.boxes[g] = scene.UnifiedBounds(g); });
-  Bounds world;
-  for (const Bounds& box : b.boxes) world.Extend(box);
-
-  // Grid box: the world bounds padded so that no primitive lies on an outer
-  // face (a ray grazing the box then never meets a surface there).
-  const glm::dvec3 wlo(world.lo), whi(world.hi);
-  const glm::dvec3 ext = whi - wlo;
-  const double maxExt = std::max(ext.x, std::max(ext.y, ext.z));
-  const glm::dvec3 absMax = glm::max(glm::abs(wlo), glm::abs(whi));
-  const double mag = std::max(absMax.x, std::max(absMax.y, absMax.z));  // largest |coordinate|
-  const double pad = std::max({1e-5 * maxExt, 0x1p-17 * mag, 1e-30});
-  const glm::vec3 lo(RoundDown(wlo.x - pad), RoundDown(wlo.y - pad), RoundDown(wlo.z - pad));
-  const glm::dvec3 hi = whi + pad;
-
-  // The traversal computes plane crossings t = (plane - o) / d in float and
-  // decides which plane comes first from them, so near an edge or corner of
-  // a cell it may walk past a sliver of a neighbour that the exact ray
-  // crosses. That sliver is within a few float ulps of the planes, relative
-  // to the coordinates' magnitude: every cell is tested enlarged by eps, so
-  // a primitive that touches a cell within rounding distance is in it.
-  b.eps = 0x1p-18 * std::max(mag, maxExt);
-
-  Res res = ChooseResolution(ext, density * double(n));
-  // Cells thinner than about a hundred float ulps of the coordinates would
-  // blur (planes collapse, the enlargement above dominates): cap each axis.
-  for (int a = 0; a < 3; ++a) {
-    const double span = hi[a] - double(lo[a]);
-    const double capD = std::floor(span / (0x1p-16 * std::max(mag, maxExt)));
-    const int cap = int(std::clamp(capD, 1.0, double(kMaxResAxis)));
-    res.r[a] = std::min(res.r[a], cap);
-  }
+  const Frame f = MakeFrame(b.boxes);
+  b.eps = f.eps;
+  Res res = ChooseResolution(f.ext, density * double(n));
+  CapResolution(res, f.lo, f.hi, f.scale);
   if (res.Cells() > kMaxCells) {
     const Res asked = res;
-    const double f = std::cbrt(double(kMaxCells) / double(res.Cells()));
-    for (int a = 0; a < 3; ++a) res.r[a] = std::max(1, int(std::floor(res.r[a] * f)));
+    const double shrink = std::cbrt(double(kMaxCells) / double(res.Cells()));
+    for (int a = 0; a < 3; ++a) res.r[a] = std::max(1, int(std::floor(res.r[a] * shrink)));
     while (res.Cells() > kMaxCells)
       for (int a = 0; a < 3; ++a) res.r[a] = std::max(1, res.r[a] - 1);
     Warn(fmt::format("grid: {}x{}x{} cells exceed the limit of {}: using {}x{}x{}", asked.r[0], asked.r[1], asked.r[2],
@@ -257,7 +72,7 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   std::uint64_t total = 0;
   try {
     for (;;) {
-      b.header = MakeHeader(lo, hi, res);
+      b.header = MakeHeader(f.lo, f.hi, res);
       out.cellStart.assign(b.header.nCells + std::size_t(1), 0u);
       total = b.Count(out.cellStart);
       if (total <= kMaxRefs || res.Cells() == 1) break;
