@@ -7,7 +7,7 @@ the traversal stacks), LDS, code size, and the occupancy in waves per SIMD
 that the registers allow. docs/OPENCL.md records its output and reads it.
 
   bench/gpu_compile.py [--mcpu gfx906] [--out DIR] [--jobs N] [--filter TEXT]
-                       [--accels grid,octree,bvh] [--precisions fast,robust,fp64]
+                       [--accels grid,octree,bvh,hgrid] [--precisions fast,robust,fp64]
                        [--type-sets T,ST,STC,all]
                        [--cold auto|call|inline] [--check-host BIN]
 
@@ -223,7 +223,7 @@ def main():
     ap.add_argument("--out", default="gpu-compile-out")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--filter", default="", help="only configurations whose id contains this text")
-    ap.add_argument("--accels", default="grid,octree,bvh")
+    ap.add_argument("--accels", default="grid,octree,bvh,hgrid")
     ap.add_argument("--precisions", default=",".join(PRECISIONS))
     ap.add_argument("--type-sets", default="T,ST,STC,all",
                     help="type sets compiled: T, ST, STC (the SPD scenes'), all (every type)")

@@ -7,11 +7,11 @@
 #include "grid.h"
 #include "octree.h"
 #include "bvh.h"
-#include "grid2.h"
+#include "hgrid.h"
 #if defined(CR_OPENCL) && !defined(CR_VARIANT_RAY)
 #include "grid_packet.cl"
 #include "octree_packet.cl"
 #include "bvh_packet.cl"
-#include "grid2_packet.cl"
+#include "hgrid_packet.cl"
 #endif
 #endif /* CELLRAY_KERNELS_ACCELS_H */

@@ -29,9 +29,9 @@
 #else
 #define CR_WITH_GRID 0
 #endif
-/* The walk (Grid_Plane .. Grid_Walk) also serves the two-level grid's two
- * levels (kernels/grid2.h). */
-#if CR_WITH_GRID || defined(CR_ACCEL_GRID2)
+/* The walk's pieces (Grid_Plane .. Grid_Walk) also serve every level of the
+ * hierarchical grid (kernels/hgrid.h). */
+#if CR_WITH_GRID || defined(CR_ACCEL_HGRID)
 
 /* Plane i (0..res[axis]) of the grid along `axis`. Computed in float in every
  * precision mode: the builder (host/accel/grid_builder.cpp) and the fp32 and

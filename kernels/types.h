@@ -131,7 +131,7 @@ CR_FUNC uint Prim_Count(const PrimRanges* r, uint k) { return r->begin[k + 1u] -
   X(Grid, GRID, grid, GridHeader, uint)                        \
   X(Octree, OCTREE, octree, OctreeHeader, OctreeNode)          \
   X(BVH, BVH, bvh, BVHHeader, BVHNode)                         \
-  X(Grid2, GRID2, grid2, GridHeader, GridHeader)
+  X(HGrid, HGRID, hgrid, GridHeader, GridHeader)
 #define CR_ACCEL_ID_(N, U, l, H, Nd) CR_ACCEL_ID_##U,
 enum { CR_ACCEL_TYPES(CR_ACCEL_ID_) CR_NUM_ACCEL_TYPES };
 #undef CR_ACCEL_ID_
@@ -159,8 +159,8 @@ typedef struct {
  * refs[cellStart[i] .. cellStart[i + 1]) (compressed row layout, nCells + 1
  * offsets). Cell planes are bmin + i * cellSize, computed only by
  * Grid_Plane() so builder and traversal agree to the bit. Also the top grid
- * and each sub-grid of the two-level grid (kernels/grid2.h), where `first`
- * tells where a sub-grid's cell offsets begin in refs (0 elsewhere). */
+ * and each grid of the hierarchical grid (kernels/hgrid.h), where `first`
+ * tells where its cell offsets begin in refs (0 elsewhere). */
 typedef struct {
   float bmin[3];
   uint nCells;
@@ -171,6 +171,12 @@ typedef struct {
   uint res[3];
   uint pad1;
 } GridHeader;
+
+/* Hierarchical grid (kernels/hgrid.h): levels below the root grid (the
+ * builder's limit and the walk's stack depth), and the marker of a cell that
+ * is a child grid (its one reference is CR_HGRID_CHILD | node index). */
+#define CR_HGRID_MAX_DEPTH 4
+#define CR_HGRID_CHILD 0x80000000u
 
 /* Octree node, 16 bytes. childMask != 0: interior node; its non-empty children
  * are stored in octant order starting at `first`, child of octant o at

@@ -41,7 +41,11 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
       Hit_Init(&hit, &ray);
       if ((in >> l) & 1u) {
         const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-        GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, ray, hit, first, job.occlusion, st);
+        PackRay<4> pr;
+        PackRay_Init<4>(pr, ray);
+        pr.anyHit = job.occlusion != 0;
+        GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, pr, ray, hit, first, job.occlusion,
+                                               st);
       }
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }

@@ -80,7 +80,9 @@ CR_SIMD_INLINE void GridSingle_EnterAt(const GridHeader& g, const Ray& ray, floa
     const int res = static_cast<int>(g.res[a]);
     const float p = ray.org[a] + tEnter * ray.dir[a];
     float rel = (p - GridPlane(g, a, 0)) / g.cellSize[a];
-    rel = __builtin_fminf(__builtin_fmaxf(rel, 0.0f), static_cast<float>(res - 1));
+    // fmax(rel, 0) then fmin(., res - 1) as selects (NaN -> 0, as fmax).
+    rel = rel > 0.0f ? rel : 0.0f;
+    rel = rel < static_cast<float>(res - 1) ? rel : static_cast<float>(res - 1);
     int c = static_cast<int>(__builtin_floorf(rel));
     auto planeT = [&](int i) { return PlaneT(GridPlane(g, a, i), ray.org[a], ray.inv[a]); };
     if (!(ray.inv[a] < 0.0f)) {
@@ -95,19 +97,17 @@ CR_SIMD_INLINE void GridSingle_EnterAt(const GridHeader& g, const Ray& ray, floa
 }
 
 // The walk of one ray through grid g (cell offsets cellStart, references
-// refs) from cell `first` (not yet tested) on; `hit` from Hit_Init or the
-// hit so far; true when an any-hit query is answered. The walk keeps the
+// refs) from cell `first` (not yet tested) on; `pr` the ray prepared for
+// the 4-wide primitive tests (PackRay_Init, anyHit set); `hit` from Hit_Init
+// or the hit so far; true when an any-hit query is answered. The walk keeps the
 // crossing parameter of each axis's next plane and recomputes only the axis
 // it stepped: the other two planes have not changed, so their parameters
 // are the scalar loop's recomputed values, bit for bit.
 template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE bool GridSingle_Walk(const KernelScene& sc, const GridHeader& g, const std::uint32_t* cellStart,
-                                    const std::uint32_t* refs, const Ray& ray, Hit& hit, const int first[3],
-                                    int anyHit, TraceStatsSum& st)
+                                    const std::uint32_t* refs, const PackRay<4>& pr, const Ray& ray, Hit& hit,
+                                    const int first[3], int anyHit, TraceStatsSum& st)
 {
-  PackRay<4> pr;
-  PackRay_Init<4>(pr, ray);
-  pr.anyHit = anyHit != 0;
   // Per axis: cell coordinate, step, exit plane crossing, and the change of
   // the cell index per step (strides 1, res x, res x res y).
   int cell[3], step[3], res[3], dIdx[3];

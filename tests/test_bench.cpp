@@ -134,8 +134,8 @@ TEST_CASE("bench: configurations planned by default and from lists")
   const auto all = bench::PlanCombos(o, true, true);
   std::set<std::string> labels;
   for (const auto& c : all) labels.insert(c.Label());
-  for (const char* l : {"simd grid", "simd octree", "simd bvh", "simd grid2", "opencl grid", "opencl bvh",
-                        "opencl grid2", "scalar bvh fast",
+  for (const char* l : {"simd grid", "simd octree", "simd bvh", "simd hgrid", "opencl grid", "opencl bvh",
+                        "opencl hgrid", "scalar bvh fast",
                         "scalar bvh fp64", "simd bvh fast", "opencl bvh fp64"})
     CHECK(labels.count(l) == 1);
   CHECK(labels.count("embree packet8") == (EmbreeAvailable() ? 1u : 0u));

@@ -330,6 +330,12 @@ TEST_CASE("opencl: conformance, octree, ray and packet variants, every SPD scene
   RunConformance(AccelKind::Octree);
 }
 
+TEST_CASE("opencl: conformance, hgrid, ray and packet variants, every SPD scene x ray kind" *
+          doctest::skip(NoOpenCL()))
+{
+  RunConformance(AccelKind::HGrid);
+}
+
 TEST_CASE("opencl: primary rays generated on the device equal the host's" * doctest::skip(NoOpenCL()))
 {
   auto cache = TestCacheDir();

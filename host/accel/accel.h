@@ -40,8 +40,9 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \
-  X(grid2TopDensity, double, "--grid2-top-density", "Two-level grid: top cells per primitive")  \
-  X(grid2Density, double, "--grid2-density", "Two-level grid: sub-cells per reference of a top cell")
+  X(hgridTopDensity, double, "--hgrid-top-density", "Hierarchical grid: root cells per primitive")       \
+  X(hgridDensity, double, "--hgrid-density", "Hierarchical grid: child cells per reference of a crowded cell") \
+  X(hgridLeaf, int, "--hgrid-leaf", "Hierarchical grid: most references a cell holds without a child grid")
 struct AccelParams {
 #define CR_ACCEL_PARAM_FIELD(f, T, opt, help) T f{};
   CR_ACCEL_PARAMS(CR_ACCEL_PARAM_FIELD)
@@ -82,16 +83,17 @@ struct BVHData {
   const std::vector<BVHNode>& Nodes() const { return nodes; }
 };
 
-// Two-level grid (kernels/grid2.h): the top grid, one sub-grid per top cell,
-// and refs holding the sub-grids' cell offsets, then the references.
-struct Grid2Data {
+// Hierarchical grid (kernels/hgrid.h): the root grid, the child grids, and
+// refs holding every grid's cell offsets, then the cells' references or
+// child markers.
+struct HGridData {
   GridHeader header{};
   std::vector<GridHeader> subs;
   std::vector<std::uint32_t> refs;
   const std::vector<GridHeader>& Nodes() const { return subs; }
 };
 
-// The built structure: the member of its kind (grid, octree, bvh, grid2: the lower
+// The built structure: the member of its kind (grid, octree, bvh, hgrid: the lower
 // names of CR_ACCEL_TYPES) holds it; the others stay empty.
 struct AccelData {
   AccelKind kind = AccelKind::BVH;
@@ -108,6 +110,6 @@ AccelData BuildAccel(const Scene& scene, AccelKind kind, const AccelParams& para
 GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& info);
 OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo& info);
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info);
-Grid2Data BuildGrid2(const Scene& scene, const AccelParams& params, AccelInfo& info);
+HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& info);
 
 }  // namespace cr

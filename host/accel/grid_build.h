@@ -1,6 +1,6 @@
 // The uniform grid's building blocks, shared by the uniform grid
-// (grid_builder.cpp) and both levels of the two-level grid
-// (grid2_builder.cpp): the resolution rule, the headers (planes of
+// (grid_builder.cpp) and every level of the hierarchical grid
+// (hgrid_builder.cpp): the resolution rule, the headers (planes of
 // Grid_Plane), the padded scene box and the cell epsilon, and the insertion
 // of a primitive into every cell its shape meets.
 #pragma once
@@ -125,12 +125,13 @@ inline Frame MakeFrame(const std::vector<Bounds>& boxes)
 
 // Cells thinner than about a hundred float ulps of the coordinates would
 // blur (planes collapse, the enlargement by eps dominates): caps each axis
-// of res over the box [lo, hi].
-inline void CapResolution(Res& res, const glm::vec3& lo, const glm::dvec3& hi, double scale)
+// of res over the box [lo, hi]: cells at least minCell * scale wide (4 eps
+// by default).
+inline void CapResolution(Res& res, const glm::vec3& lo, const glm::dvec3& hi, double scale, double minCell = 0x1p-16)
 {
   for (int a = 0; a < 3; ++a) {
     const double span = hi[a] - double(lo[a]);
-    const double capD = std::floor(span / (0x1p-16 * scale));
+    const double capD = std::floor(span / (minCell * scale));
     const int cap = int(std::clamp(capD, 1.0, double(kMaxResAxis)));
     res.r[a] = std::min(res.r[a], cap);
   }

@@ -141,15 +141,15 @@ Planes PlanesOf(const AccelData& data)
       }
       break;
     }
-    case AccelKind::Grid2: {
-      // Both levels: the top grid's planes and every sub-grid's.
-      const GridHeader& h = data.grid2.header;
+    case AccelKind::HGrid: {
+      // Every level: the root's planes and every child grid's.
+      const GridHeader& h = data.hgrid.header;
       for (int a = 0; a < 3; ++a) {
         for (int i = 0; i <= int(h.res[a]); ++i) p.axis[a].push_back(GridPlane(h, a, i));
         p.lo[a] = h.bmin[a];
         p.hi[a] = h.bmax[a];
       }
-      for (const GridHeader& sub : data.grid2.subs)
+      for (const GridHeader& sub : data.hgrid.subs)
         if (sub.nRefs != 0)
           for (int a = 0; a < 3; ++a)
             for (int i = 0; i <= int(sub.res[a]); ++i) p.axis[a].push_back(GridPlane(sub, a, i));

@@ -1,0 +1,303 @@
+// Hierarchical grid builder (Jevans & Wyvill 1989; the two-level grid of
+// Kalojanov, Billeter & Slusallek 2011 is its first level): a root uniform
+// grid over the scene (the uniform grid's builder at --hgrid-top-density
+// cells per primitive), then in every cell holding more than --hgrid-leaf
+// references a uniform grid of its own with about --hgrid-density cells per
+// reference, cubic as far as the cell allows (the uniform grid's resolution
+// rule), and so on down to CR_HGRID_MAX_DEPTH levels below the root. A child
+// is kept only where the surface area heuristic finds it cheaper than the
+// cell's own tests (BuildChild), so huge or overlapping primitives that
+// every child cell would hold again stay in their cell. A child's first planes
+// are its cell's lower planes, bit for bit; its cell size is rounded up
+// until its last planes reach the cell's upper planes (MakeHeader), so the
+// children cover their cells without gaps. A reference goes into every cell
+// its shape meets at every level, each grown by the uniform grid's epsilon
+// (host/accel/grid_build.h), and cells are filled in ascending reference
+// order, so their references come sorted. The root's cells are refined in
+// parallel.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <new>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "host/accel/accel.h"
+#include "host/accel/grid_build.h"
+#include "host/core/error.h"
+
+namespace cr {
+
+using namespace gridbuild;
+
+namespace {
+
+// Defaults (0 on the command line): bench/hgrid_param_sweep.py, docs/ACCEL.md.
+constexpr double kDefaultTopDensity = 0.25;
+constexpr double kDefaultSubDensity = 2.0;
+constexpr double kMaxSubDensity = 1024.0;
+// A cell with more references than this gets a child grid (--hgrid-leaf).
+constexpr int kDefaultLeafRefs = 8;
+// A child's cells are at least twice the epsilon wide (the uniform grid's
+// are four times: a hierarchy refines only where references crowd).
+constexpr double kMinChildCell = 0x1p-17;
+// The cost of a cell step against a primitive test, and the most copies of
+// a cell's references a child may hold (BuildChild).
+constexpr double kStepCost = 1.0;
+constexpr std::uint64_t kMaxCopies = 8;
+// A child grid holds at most this many cells.
+constexpr std::uint64_t kMaxChildCells = std::uint64_t(1) << 22;
+
+double Density(double d, double def, double max, const char* option)
+{
+  if (!std::isfinite(d) || d < 0.0) throw InputError(fmt::format("{} {} is not a finite number >= 0", option, d));
+  if (d == 0.0) return def;
+  if (d > max) {
+    Warn(fmt::format("{} {} is too large: using {}", option, d, max));
+    return max;
+  }
+  return d;
+}
+
+// One grid while building: its header, cell offsets into `items`, and each
+// cell's references, or for a child cell the marker CR_HGRID_CHILD | k with
+// k the child's ordinal in `children`.
+struct GridBuild {
+  GridHeader h{};
+  std::vector<std::uint32_t> start;
+  std::vector<std::uint32_t> items;
+  std::vector<std::unique_ptr<GridBuild>> children;
+};
+
+struct Context {
+  const Builder& b;
+  const Frame& f;
+  double subDensity;
+  std::uint32_t leafRefs;
+};
+
+void Refine(const Context& cx, GridBuild& grid, std::uint32_t c, int depth);
+
+// The box of cell c of grid h: float lower planes, upper planes in double.
+void CellBox(const GridHeader& h, std::uint32_t c, glm::vec3& lo, glm::dvec3& hi)
+{
+  const std::uint32_t xyz[3] = {c % h.res[0], (c / h.res[0]) % h.res[1], c / (h.res[0] * h.res[1])};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = grid_plane::Grid_Plane(&h, a, int(xyz[a]));
+    hi[a] = double(grid_plane::Grid_Plane(&h, a, int(xyz[a]) + 1));
+  }
+}
+
+// A child grid over [lo, hi] for the references `refs` (ascending), at
+// level `depth`; nullptr when it would separate nothing.
+std::unique_ptr<GridBuild> BuildChild(const Context& cx, const glm::vec3& lo, const glm::dvec3& hi,
+                                      const std::uint32_t* refs, std::uint32_t n, int depth)
+{
+  Res res = ChooseResolution(hi - glm::dvec3(lo), cx.subDensity * double(n));
+  CapResolution(res, lo, hi, cx.f.scale, kMinChildCell);
+  while (res.Cells() > kMaxChildCells)
+    for (int a = 0; a < 3; ++a) res.r[a] = std::max(1, res.r[a] / 2);
+  if (res.Cells() == 1) return nullptr;
+  auto g = std::make_unique<GridBuild>();
+  g->h = MakeHeader(lo, hi, res);
+  const std::uint32_t nCells = g->h.nCells;
+  g->start.assign(nCells + std::size_t(1), 0u);
+  for (std::uint32_t i = 0; i < n; ++i) cx.b.ForEachCellOf(g->h, refs[i], [&](std::uint32_t k) { ++g->start[k]; });
+  std::uint64_t sum = 0;
+  for (std::uint32_t k = 0; k < nCells; ++k) {
+    const std::uint32_t m = g->start[k];
+    g->start[k] = std::uint32_t(sum);
+    sum += m;
+  }
+  // The surface area heuristic of a grid: a ray through the cell enters
+  // each child cell with probability about the ratio of their areas (all
+  // child cells alike), and pays a step there and a test per reference. The
+  // child replaces the cell's n tests only where that costs less, and where
+  // it copies references at most kMaxCopies times (huge or overlapping
+  // primitives that every child cell would hold again).
+  const auto area = [](const glm::dvec3& e) { return e.x * e.y + e.y * e.z + e.z * e.x; };
+  const double ratio = area(glm::dvec3(g->h.cellSize[0], g->h.cellSize[1], g->h.cellSize[2])) /
+                       area(glm::dvec3(hi) - glm::dvec3(lo));
+  const double cost = ratio * (kStepCost * double(nCells) + double(sum));
+  if (!(cost < double(n)) || sum > kMaxCopies * std::uint64_t(n)) return nullptr;
+  g->start[nCells] = std::uint32_t(sum);
+  g->items.resize(sum);
+  std::vector<std::uint32_t> fill(g->start.begin(), g->start.end() - 1);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t r = refs[i];
+    cx.b.ForEachCellOf(g->h, r, [&](std::uint32_t k) { g->items[fill[k]++] = r; });
+  }
+  g->h.nRefs = std::uint32_t(sum);
+  if (depth < CR_HGRID_MAX_DEPTH)
+    for (std::uint32_t k = 0; k < nCells; ++k) Refine(cx, *g, k, depth);
+  return g;
+}
+
+// Gives cell c of `grid` (at level depth - 1) a child grid where it holds
+// more than --hgrid-leaf references and the child separates them.
+void Refine(const Context& cx, GridBuild& grid, std::uint32_t c, int depth)
+{
+  const std::uint32_t begin = grid.start[c], end = grid.start[c + 1];
+  if (end - begin <= cx.leafRefs) return;
+  glm::vec3 lo;
+  glm::dvec3 hi;
+  CellBox(grid.h, c, lo, hi);
+  std::unique_ptr<GridBuild> child = BuildChild(cx, lo, hi, grid.items.data() + begin, end - begin, depth + 1);
+  if (!child) return;
+  // The cell's references stay in items until the grid is laid out; the
+  // marker's position is its first item (the layout keeps only that one).
+  grid.items[begin] = CR_HGRID_CHILD | std::uint32_t(grid.children.size());
+  grid.children.push_back(std::move(child));
+}
+
+bool IsChildCell(const GridBuild& g, std::uint32_t c)
+{
+  return g.start[c + 1] > g.start[c] && (g.items[g.start[c]] & CR_HGRID_CHILD) != 0u;
+}
+
+// Every grid, depth first, the root at 0; each child's index follows.
+void Collect(GridBuild& g, std::vector<GridBuild*>& all)
+{
+  all.push_back(&g);
+  for (auto& c : g.children) Collect(*c, all);
+}
+
+}  // namespace
+
+HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& info)
+{
+  const double topDensity = Density(params.hgridTopDensity, kDefaultTopDensity, kMaxDensity, "--hgrid-top-density");
+  const double subDensity = Density(params.hgridDensity, kDefaultSubDensity, kMaxSubDensity, "--hgrid-density");
+  if (params.hgridLeaf < 0) throw InputError(fmt::format("--hgrid-leaf {} is negative", params.hgridLeaf));
+  const std::uint32_t leafRefs = std::uint32_t(params.hgridLeaf == 0 ? kDefaultLeafRefs : params.hgridLeaf);
+
+  AccelParams topParams;
+  topParams.gridDensity = topDensity;
+  AccelInfo topInfo;
+  GridData top = BuildGrid(scene, topParams, topInfo);
+  GridBuild root;
+  root.h = top.header;
+  root.start = std::move(top.cellStart);
+  root.items = std::move(top.refs);
+
+  const std::uint32_t n = scene.NumUnified();
+  if (n != 0) {
+    Builder b(scene);
+    b.boxes.resize(n);
+    tbb::parallel_for(std::uint32_t(0), n, [&](std::uint32_t g) { b.boxes[g] = scene.UnifiedBounds(g); });
+    const Frame f = MakeFrame(b.boxes);
+    b.eps = f.eps;
+    const Context cx{b, f, subDensity, leafRefs};
+    // Children are built per root cell in parallel, then numbered in cell
+    // order (deterministic whatever the threads).
+    std::vector<std::unique_ptr<GridBuild>> perCell(root.h.nCells);
+    try {
+      tbb::parallel_for(std::uint32_t(0), root.h.nCells, [&](std::uint32_t c) {
+        const std::uint32_t begin = root.start[c], end = root.start[c + 1];
+        if (end - begin <= cx.leafRefs) return;
+        glm::vec3 lo;
+        glm::dvec3 hi;
+        CellBox(root.h, c, lo, hi);
+        perCell[c] = BuildChild(cx, lo, hi, root.items.data() + begin, end - begin, 1);
+      });
+    } catch (const std::bad_alloc&) {
+      throw RuntimeError("hgrid: out of memory for the child grids");
+    }
+    for (std::uint32_t c = 0; c < root.h.nCells; ++c)
+      if (perCell[c]) {
+        root.items[root.start[c]] = CR_HGRID_CHILD | std::uint32_t(root.children.size());
+        root.children.push_back(std::move(perCell[c]));
+      }
+  }
+
+  // Layout: every grid's cell offsets (root first), then every grid's items;
+  // a child cell keeps one item, its marker with the child's node index.
+  std::vector<GridBuild*> all;
+  Collect(root, all);
+  std::vector<std::uint32_t> nodeOf(all.size());  // all[i]'s index in subs (i - 1)
+  std::uint64_t nOffsets = 0, nItems = 0, nRefs = 0, nCells = 0, emptyCells = 0, childCells = 0;
+  std::vector<std::uint64_t> offsetAt(all.size()), itemAt(all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const GridBuild& g = *all[i];
+    offsetAt[i] = nOffsets;
+    nOffsets += g.start.size();
+    nCells += g.h.nCells;
+    for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
+      const std::uint32_t k = g.start[c + 1] - g.start[c];
+      if (IsChildCell(g, c)) {
+        ++nItems;
+        ++childCells;
+      } else {
+        nItems += k;
+        nRefs += k;
+        emptyCells += k == 0;
+      }
+    }
+  }
+  for (std::size_t i = 0, at = std::size_t(nOffsets); i < all.size(); ++i) {
+    itemAt[i] = at;
+    const GridBuild& g = *all[i];
+    for (std::uint32_t c = 0; c < g.h.nCells; ++c) at += IsChildCell(g, c) ? 1 : g.start[c + 1] - g.start[c];
+  }
+  if (nOffsets + nItems >= std::uint64_t(CR_HGRID_CHILD))
+    throw RuntimeError(fmt::format("hgrid: {} references and cell offsets do not fit 31-bit indices", nOffsets + nItems));
+  // Child ordinals -> node indices: a grid's children follow it depth first.
+  std::vector<std::vector<std::uint32_t>> childNode(all.size());
+  {
+    std::size_t next = 1;
+    std::function<void(GridBuild&, std::size_t)> walk = [&](GridBuild& g, std::size_t self) {
+      for (auto& c : g.children) {
+        const std::size_t ci = next++;
+        childNode[self].push_back(std::uint32_t(ci - 1));
+        walk(*c, ci);
+      }
+    };
+    walk(root, 0);
+  }
+  HGridData out;
+  try {
+    out.subs.assign(std::max<std::size_t>(all.size() - 1, 1), GridHeader{});
+    out.refs.resize(nOffsets + nItems);
+  } catch (const std::bad_alloc&) {
+    throw RuntimeError(fmt::format("hgrid: out of memory for {} references", nOffsets + nItems));
+  }
+  tbb::parallel_for(std::size_t(0), all.size(), [&](std::size_t i) {
+    GridBuild& g = *all[i];
+    g.h.first = std::uint32_t(offsetAt[i]);
+    std::uint64_t at = itemAt[i];
+    std::uint32_t* offsets = out.refs.data() + offsetAt[i];
+    for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
+      offsets[c] = std::uint32_t(at);
+      if (IsChildCell(g, c)) {
+        out.refs[at++] = CR_HGRID_CHILD | childNode[i][g.items[g.start[c]] & ~CR_HGRID_CHILD];
+      } else {
+        for (std::uint32_t k = g.start[c]; k < g.start[c + 1]; ++k) out.refs[at++] = g.items[k];
+      }
+    }
+    offsets[g.h.nCells] = std::uint32_t(at);
+    if (i == 0)
+      out.header = g.h;
+    else
+      out.subs[i - 1] = g.h;
+  });
+  out.header.nRefs = std::uint32_t(std::min<std::uint64_t>(nRefs, UINT32_MAX));
+
+  std::function<int(const GridBuild&)> depthOf = [&](const GridBuild& g) {
+    int d = 0;
+    for (const auto& c : g.children) d = std::max(d, 1 + depthOf(*c));
+    return d;
+  };
+  const int levels = 1 + depthOf(root);
+  info.nodes = nCells;
+  info.leaves = nCells - childCells;
+  info.emptyLeaves = emptyCells;
+  info.refs = nRefs;
+  info.bytes = sizeof(GridHeader) * (1 + out.subs.size()) + out.refs.size() * sizeof(std::uint32_t);
+  info.params = fmt::format("top={} sub={} leaf={} res={}x{}x{} grids={} levels={}", topDensity, subDensity, leafRefs,
+                            out.header.res[0], out.header.res[1], out.header.res[2], all.size(), levels);
+  return out;
+}
+
+}  // namespace cr

@@ -1,0 +1,103 @@
+/* Hierarchical grid (Jevans & Wyvill 1989, "Adaptive voxel subdivision for
+ * ray tracing"; its two-level form: Kalojanov, Billeter & Slusallek 2011,
+ * "Two-Level Grids for Ray Tracing on GPUs"): a uniform grid whose crowded
+ * cells hold uniform grids of their own, sized by their reference counts,
+ * down to CR_HGRID_MAX_DEPTH levels below the root
+ * (host/accel/hgrid_builder.cpp). Empty space costs one coarse step; a
+ * teapot in a stadium gets fine cells only where the teapot is.
+ *
+ * Layout (kernels/types.h CR_ACCEL_TYPES: header GridHeader, nodes
+ * GridHeader):
+ *  - the header is the root grid, the nodes the child grids, each a
+ *    GridHeader with res, planes and box as a uniform grid's, nRefs the
+ *    references below it (the header's 0: nothing to trace), and `first`
+ *    the index in refs of its nCells + 1 cell offsets (absolute indices into
+ *    refs);
+ *  - a cell holds either references (sorted ascending) or exactly one child
+ *    marker CR_HGRID_CHILD | k: the cell is child grid nodes[k], whose first
+ *    planes are the cell's lower planes, bit for bit, and whose last planes
+ *    lie at or just past its upper planes (the builder rounds the cell size
+ *    up), so a child covers its cell without a gap.
+ *
+ * Every level is walked by the 3D-DDA of kernels/grid.h with its robustness
+ * rules (planes recomputed, never accumulated; first cell corrected to the
+ * plane parameters); the builder inserts a primitive into every cell it
+ * meets at every level, each grown by the uniform grid's epsilon. A child's
+ * walk starts at the parameter where its parent's walk entered the cell
+ * (Grid_EnterAt: no second box test); when it steps out of the child, the
+ * parent's walk goes on from the cell. The walk ends when the closest hit so
+ * far lies at or before the current cell's exit (at any level: a child's
+ * last planes overshoot its cell by a few ulps, well within the epsilon by
+ * which the parent's cell took its references, so nothing beyond the cell
+ * is missed), or when it leaves the root. A hit beyond the cell (a
+ * primitive spanning cells) is kept while the walk goes on, as in the
+ * uniform grid.
+ *
+ * Counts (CR_STATS): nTS cells visited at every level, nLeaves cells that
+ * hold references or none, nEmptyLeaves the empty ones, nIT primitive tests. */
+#ifndef CELLRAY_KERNELS_HGRID_H
+#define CELLRAY_KERNELS_HGRID_H
+#include "grid.h"
+
+/* Compiled unless the build is for one other structure (CR_ACCEL_ONE, see
+ * trace.cl); CR_WITH_HGRID tells the generated dispatch (CR_IF_WITH). */
+#if !defined(CR_ACCEL_ONE) || defined(CR_ACCEL_HGRID)
+#define CR_WITH_HGRID 1
+#else
+#define CR_WITH_HGRID 0
+#endif
+
+#if CR_WITH_HGRID
+
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
+ * hierarchical grid; `hit` must come from Hit_Init. */
+CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridHeader* subs, CR_GLOBAL const uint* refs,
+                         const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+{
+  if (root->nRefs == 0u) return;
+  int cell[3];
+  real tEnter;
+  if (!Grid_EnterT(root, ray, hit->t, cell, &tEnter)) return;
+  /* The ancestors of the grid walked: their grids (node index, or
+   * CR_NO_HIT for the root) and current cells. */
+  uint stackGrid[CR_HGRID_MAX_DEPTH];
+  int stackCell[3 * CR_HGRID_MAX_DEPTH];
+  int sp = 0;
+  uint gi = CR_NO_HIT;
+  CR_GLOBAL const GridHeader* g = root;
+  for (;;) {
+    /* Cell `cell` of grid g, entered at tEnter. */
+    CR_COUNT(st, nTS);
+    CR_GLOBAL const uint* cellStart = refs + g->first;
+    const uint idx = Grid_CellIndex(g, cell);
+    const uint begin = cellStart[idx], end = cellStart[idx + 1u];
+    if (end - begin == 1u && (refs[begin] & CR_HGRID_CHILD) != 0u) {
+      CR_ASSERT(sp < CR_HGRID_MAX_DEPTH);
+      stackGrid[sp] = gi;
+      CR_UNROLL for (int a = 0; a < 3; ++a) stackCell[3 * sp + a] = cell[a];
+      ++sp;
+      gi = refs[begin] & ~CR_HGRID_CHILD;
+      g = subs + gi;
+      Grid_EnterAt(g, ray, tEnter, cell);
+      continue;
+    }
+    CR_COUNT(st, nLeaves);
+    if (begin == end) CR_COUNT(st, nEmptyLeaves);
+    for (uint i = begin; i < end; ++i) {
+      CR_COUNT(st, nIT);
+      if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return;
+    }
+    /* On to the next cell: of this grid, or, where the walk leaves it, of
+     * the nearest ancestor it does not leave. */
+    while (!Grid_Step(g, ray, hit->t, cell, &tEnter)) {
+      if (hit->t <= tEnter || sp == 0) return;
+      --sp;
+      gi = stackGrid[sp];
+      g = gi == CR_NO_HIT ? root : subs + gi;
+      CR_UNROLL for (int a = 0; a < 3; ++a) cell[a] = stackCell[3 * sp + a];
+    }
+  }
+}
+
+#endif /* CR_WITH_HGRID */
+#endif /* CELLRAY_KERNELS_HGRID_H */

@@ -1,0 +1,153 @@
+// Hierarchical grid (kernels/hgrid.h HGrid_Trace), one ray at a time: rays
+// are prepared and enter the root grid N at a time (RayPacket_Init,
+// GridPacket_Enter), then each walks the grids cell by cell, descending
+// into a child grid from the parameter where it entered the child's cell
+// (GridSingle_EnterAt of simd/grid_walk.h) and testing a cell's primitives
+// 4 at a time. The structure has no packet walk of its own yet: its packet
+// kernel is this one (kernels_hgrid.cpp).
+#pragma once
+
+#include "simd/bvh_single.h"
+#include "simd/grid_walk.h"
+#include "simd/kernel_common.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+// The walk of one ray from cell `first` of the root grid, entered at
+// tEnter; HGrid_Trace step by step. Each level keeps the crossing parameter
+// of its next plane per axis and recomputes only the axis it stepped (as
+// GridSingle_Walk), and the stack keeps the ancestors' (bit for bit the
+// scalar walk's recomputed values: their planes have not changed).
+template <unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], float tEnter,
+                                     int anyHit, TraceStatsSum& st)
+{
+  PackRay<4> pr;
+  PackRay_Init<4>(pr, ray);
+  pr.anyHit = anyHit != 0;
+  const std::uint32_t* refs = sc.hgridRefs;
+  int step[3];
+  for (int a = 0; a < 3; ++a) step[a] = ray.inv[a] < 0.0f ? -1 : 1;
+  // The grid walked, in locals: header, cell offsets, cell, next crossings,
+  // cell index, its change per step and the resolution; the ancestors' on
+  // the stack (what follows from the header is recomputed when popped).
+  const GridHeader* g = nullptr;
+  const std::uint32_t* cellStart = nullptr;
+  int cell[3], dIdx[3], res[3];
+  float tNext[3];
+  std::uint32_t idx = 0;
+  struct Saved {
+    const GridHeader* g;
+    int cell[3];
+    float tNext[3];
+    std::uint32_t idx;
+  };
+  Saved stack[CR_HGRID_MAX_DEPTH];
+  int sp = 0;
+  const auto setGrid = [&](const GridHeader* ng) __attribute__((always_inline)) {
+    g = ng;
+    cellStart = refs + ng->first;
+    const int stride[3] = {1, int(ng->res[0]), int(ng->res[0] * ng->res[1])};
+    for (int a = 0; a < 3; ++a) {
+      res[a] = int(ng->res[a]);
+      dIdx[a] = step[a] * stride[a];
+    }
+  };
+  const auto enterCell = [&](const int c[3]) __attribute__((always_inline)) {
+    for (int a = 0; a < 3; ++a) {
+      cell[a] = c[a];
+      tNext[a] = PlaneT(GridPlane(*g, a, step[a] > 0 ? c[a] + 1 : c[a]), ray.org[a], ray.inv[a]);
+    }
+    idx = std::uint32_t(c[0]) + g->res[0] * (std::uint32_t(c[1]) + g->res[1] * std::uint32_t(c[2]));
+  };
+  setGrid(sc.hgridHeader);
+  enterCell(first);
+  for (;;) {
+    if constexpr (kStats) ++st.nTS;
+    const std::uint32_t begin = cellStart[idx], end = cellStart[idx + 1];
+    if (end - begin == 1u && (refs[begin] & CR_HGRID_CHILD) != 0u) {
+      Saved& s = stack[sp++];
+      s.g = g;
+      for (int a = 0; a < 3; ++a) {
+        s.cell[a] = cell[a];
+        s.tNext[a] = tNext[a];
+      }
+      s.idx = idx;
+      setGrid(sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD));
+      int c[3];
+      GridSingle_EnterAt(*g, ray, tEnter, c);
+      enterCell(c);
+      continue;
+    }
+    if constexpr (kStats) ++st.nLeaves;
+    if (begin == end) {
+      if constexpr (kStats) ++st.nEmptyLeaves;
+    } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st) && anyHit) {
+      return;
+    }
+    // Exit face: the smallest crossing, x before y before z on ties (the
+    // scalar loop's strict <), chosen without branches.
+    for (;;) {
+      const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
+      const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
+      tEnter = tNext[axis];
+      if (hit.t <= tEnter) return;
+      const int c = cell[axis] + step[axis];
+      if (static_cast<unsigned>(c) < static_cast<unsigned>(res[axis])) {
+        cell[axis] = c;
+        idx += static_cast<std::uint32_t>(dIdx[axis]);
+        tNext[axis] = PlaneT(GridPlane(*g, axis, step[axis] > 0 ? c + 1 : c), ray.org[axis], ray.inv[axis]);
+        break;
+      }
+      if (sp == 0) return;
+      const Saved& s = stack[--sp];
+      setGrid(s.g);
+      for (int a = 0; a < 3; ++a) {
+        cell[a] = s.cell[a];
+        tNext[a] = s.tNext[a];
+      }
+      idx = s.idx;
+    }
+  }
+}
+
+// Traces positions [job.begin, job.end) one ray at a time.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void HGridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const PrimView pv = MakePrimView(sc);
+  const GridHeader& g = *sc.hgridHeader;
+  TraceStatsSum st;
+  for (std::size_t p = job.begin; p < job.end; p += N) {
+    const RayRecord* recs[N];
+    std::uint32_t idx[N];
+    const int count = Job_Rays<N>(job, p, recs, idx);
+    RayPacket<N> P;
+    HitPacket<N> H;
+    RayPacket_Init<N>(P, H, recs);
+    vint<N> cellV[3] = {vint<N>(0), vint<N>(0), vint<N>(0)};
+    vfloat<N> tEnterV(0.0f);
+    unsigned in = 0;
+    if (g.nRefs != 0u)
+      in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV, &tEnterV).Bits();
+    alignas(32) std::uint32_t cells[3][N];
+    alignas(32) float tEnter[N];
+    for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
+    tEnterV.Store(tEnter);
+    Ray rays[N];
+    RayPacket_Extract<N>(P, H, rays);
+    for (int l = 0; l < count; ++l) {
+      const Ray& ray = rays[l];
+      Hit hit;
+      Hit_Init(&hit, &ray);
+      if ((in >> l) & 1u) {
+        const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
+        HGridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, tEnter[l], job.occlusion, st);
+      }
+      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    }
+  }
+  if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS

@@ -1,0 +1,131 @@
+// Hierarchical grid (kernels/hgrid.h, host/accel/hgrid_builder.cpp): the
+// layout's invariants, refinement where references crowd (the teapot in a
+// stadium), and answers against the reference on every CPU backend. The
+// cell-plane hard cases (tests/hard/) cover the planes of every level.
+#include <cstring>
+#include <functional>
+
+#include <doctest/doctest.h>
+
+#include "host/accel/accel.h"
+#include "host/core/error.h"
+#include "host/scene/generate.h"
+#include "host/trace/tracer.h"
+#include "tests/test_util.h"
+
+using namespace cr;
+
+namespace {
+
+// Checks the flat layout: every grid's offsets ascend inside refs, a cell is
+// references (ascending, below the marker bit) or one child marker, every
+// child is named by exactly one cell and lies at or past its cell's planes;
+// returns the number of levels.
+int CheckLayout(const HGridData& h)
+{
+  const std::size_t nRefs = h.refs.size();
+  std::vector<int> namedBy(h.subs.size(), 0);
+  std::function<int(const GridHeader&, int)> walk = [&](const GridHeader& g, int depth) {
+    REQUIRE(depth <= CR_HGRID_MAX_DEPTH);
+    REQUIRE(std::size_t(g.first) + g.nCells < nRefs);
+    int deepest = depth;
+    for (std::uint32_t c = 0; c < g.nCells; ++c) {
+      const std::uint32_t begin = h.refs[g.first + c], end = h.refs[g.first + c + 1];
+      REQUIRE(begin <= end);
+      REQUIRE(end <= nRefs);
+      if (end - begin == 1 && (h.refs[begin] & CR_HGRID_CHILD)) {
+        const std::uint32_t k = h.refs[begin] & ~CR_HGRID_CHILD;
+        REQUIRE(k < h.subs.size());
+        ++namedBy[k];
+        const GridHeader& child = h.subs[k];
+        const std::uint32_t xyz[3] = {c % g.res[0], (c / g.res[0]) % g.res[1], c / (g.res[0] * g.res[1])};
+        for (int a = 0; a < 3; ++a) {
+          // The child's box is the cell's, its last plane at or past the cell's.
+          CHECK(child.bmin[a] == g.bmin[a] + float(xyz[a]) * g.cellSize[a]);
+          CHECK(child.bmax[a] >= g.bmin[a] + float(xyz[a] + 1) * g.cellSize[a]);
+        }
+        deepest = std::max(deepest, walk(child, depth + 1));
+      } else {
+        for (std::uint32_t i = begin; i < end; ++i) {
+          CHECK((h.refs[i] & CR_HGRID_CHILD) == 0u);
+          if (i > begin) CHECK(h.refs[i - 1] < h.refs[i]);
+        }
+      }
+    }
+    return deepest;
+  };
+  const int levels = 1 + walk(h.header, 0);
+  if (levels > 1)
+    for (int n : namedBy) CHECK(n == 1);
+  return levels;
+}
+
+}  // namespace
+
+TEST_CASE("hgrid: the teapot in a stadium refines where it crowds; answers 0 wrong on scalar and simd")
+{
+  const Scene scene = GenerateStadium(3);
+  AccelInfo info;
+  const HGridData h = BuildHGrid(scene, AccelParams{}, info);
+  const int levels = CheckLayout(h);
+  CHECK(levels >= 3);
+  const auto rays = test::MakeRays(scene, RayKind::Primary, 64);
+  const auto perRay = [&](AccelKind accel) {
+    TraceConfig cfg;
+    cfg.backend = Backend::Scalar;
+    cfg.accel = accel;
+    cfg.stats = true;
+    auto tracer = CreateTracer(scene, cfg);
+    std::vector<HitRecord> hits;
+    TraceStatsSum st;
+    tracer->Trace(rays, hits, false, &st);
+    return double(st.nIT) / double(rays.size());
+  };
+  // The uniform grid puts the stadium's whole centre in a cell or two.
+  const double grid = perRay(AccelKind::Grid), hgrid = perRay(AccelKind::HGrid);
+  MESSAGE("tests per ray: grid ", grid, ", hgrid ", hgrid, " (", levels, " levels)");
+  CHECK(hgrid * 5.0 < grid);
+  for (Backend backend : {Backend::Scalar, Backend::Simd})
+    for (bool occlusion : {false, true}) {
+      CAPTURE(BackendName(backend));
+      CAPTURE(occlusion);
+      TraceConfig cfg;
+      cfg.backend = backend;
+      cfg.accel = AccelKind::HGrid;
+      std::vector<HitRecord> a, b;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &a).wrong == 0);
+      cfg.accel = AccelKind::Grid;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &b).wrong == 0);
+      // The same answers as the uniform grid, bit for bit (occlusion: which
+      // primitive answers first is the walk's).
+      REQUIRE(a.size() == b.size());
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < a.size(); ++i)
+        differ += occlusion ? (a[i].prim == CR_NO_HIT) != (b[i].prim == CR_NO_HIT)
+                            : std::memcmp(&a[i], &b[i], sizeof(HitRecord)) != 0;
+      CHECK(differ == 0);
+    }
+}
+
+TEST_CASE("hgrid: SPD scenes build a valid layout; densities are checked")
+{
+  for (const char* name : {"balls", "teapot", "tree"}) {
+    CAPTURE(name);
+    const Scene& scene = test::CachedScene(test::SpdPath(name));
+    AccelInfo info;
+    const HGridData h = BuildHGrid(scene, AccelParams{}, info);
+    CHECK(CheckLayout(h) >= 2);
+    CHECK(info.refs >= scene.NumUnified());
+  }
+  const Scene& scene = test::CachedScene(test::SpdPath("tetra"));
+  AccelInfo info;
+  AccelParams p;
+  p.hgridDensity = -1.0;
+  CHECK_THROWS_AS(BuildHGrid(scene, p, info), InputError);
+  p.hgridDensity = 0.0;
+  p.hgridTopDensity = std::nan("");
+  CHECK_THROWS_AS(BuildHGrid(scene, p, info), InputError);
+  // An empty scene: one empty root cell.
+  const HGridData e = BuildHGrid(Scene{}, AccelParams{}, info);
+  CHECK(e.header.nRefs == 0u);
+}
