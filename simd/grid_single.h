@@ -14,13 +14,15 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
-// Traces positions [job.begin, job.end) one ray at a time.
-template <int N, unsigned kTypes, bool kFast, bool kStats>
-void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+// Positions [job.begin, job.end) of a grid-walking structure whose root is
+// grid g, one ray at a time: rays prepared and entered N at a time, then
+// walk(ray, hit, first, tEnter) for each ray that enters, from its first
+// cell and entry parameter; the answers to job.hits. Serves the uniform grid
+// and the hierarchical grid (simd/hgrid_single.h).
+template <int N, bool kFast, class Walk>
+CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
 {
   const PrimView pv = MakePrimView(sc);
-  const GridHeader& g = *sc.gridHeader;
-  TraceStatsSum st;
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];
     std::uint32_t idx[N];
@@ -29,10 +31,14 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
     vint<N> cellV[3] = {vint<N>(0), vint<N>(0), vint<N>(0)};
+    vfloat<N> tEnterV(0.0f);
     unsigned in = 0;
-    if (g.nRefs != 0u) in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV).Bits();
+    if (g.nRefs != 0u)
+      in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV, &tEnterV).Bits();
     alignas(32) std::uint32_t cells[3][N];
+    alignas(32) float tEnter[N];
     for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
+    tEnterV.Store(tEnter);
     Ray rays[N];
     RayPacket_Extract<N>(P, H, rays);
     for (int l = 0; l < count; ++l) {
@@ -41,15 +47,25 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
       Hit_Init(&hit, &ray);
       if ((in >> l) & 1u) {
         const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-        PackRay<4> pr;
-        PackRay_Init<4>(pr, ray);
-        pr.anyHit = job.occlusion != 0;
-        GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, pr, ray, hit, first, job.occlusion,
-                                               st);
+        walk(ray, hit, first, tEnter[l]);
       }
       job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
     }
   }
+}
+
+// Traces positions [job.begin, job.end) one ray at a time.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  const GridHeader& g = *sc.gridHeader;
+  TraceStatsSum st;
+  GridSingle_Rays<N, kFast>(sc, g, job, [&](const Ray& ray, Hit& hit, const int first[3], float) {
+    PackRay<4> pr;
+    PackRay_Init<4>(pr, ray);
+    pr.anyHit = job.occlusion != 0;
+    GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, pr, ray, hit, first, job.occlusion, st);
+  });
   if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "simd/bvh_single.h"
+#include "simd/grid_single.h"
 #include "simd/grid_walk.h"
 #include "simd/kernel_common.h"
 
@@ -111,42 +112,15 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
   }
 }
 
-// Traces positions [job.begin, job.end) one ray at a time.
+// Traces positions [job.begin, job.end) one ray at a time (the rays'
+// preparation and root entry of simd/grid_single.h).
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void HGridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  const PrimView pv = MakePrimView(sc);
-  const GridHeader& g = *sc.hgridHeader;
   TraceStatsSum st;
-  for (std::size_t p = job.begin; p < job.end; p += N) {
-    const RayRecord* recs[N];
-    std::uint32_t idx[N];
-    const int count = Job_Rays<N>(job, p, recs, idx);
-    RayPacket<N> P;
-    HitPacket<N> H;
-    RayPacket_Init<N>(P, H, recs);
-    vint<N> cellV[3] = {vint<N>(0), vint<N>(0), vint<N>(0)};
-    vfloat<N> tEnterV(0.0f);
-    unsigned in = 0;
-    if (g.nRefs != 0u)
-      in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV, &tEnterV).Bits();
-    alignas(32) std::uint32_t cells[3][N];
-    alignas(32) float tEnter[N];
-    for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
-    tEnterV.Store(tEnter);
-    Ray rays[N];
-    RayPacket_Extract<N>(P, H, rays);
-    for (int l = 0; l < count; ++l) {
-      const Ray& ray = rays[l];
-      Hit hit;
-      Hit_Init(&hit, &ray);
-      if ((in >> l) & 1u) {
-        const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-        HGridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, tEnter[l], job.occlusion, st);
-      }
-      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
-    }
-  }
+  GridSingle_Rays<N, kFast>(sc, *sc.hgridHeader, job, [&](const Ray& ray, Hit& hit, const int first[3], float tEnter) {
+    HGridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, tEnter, job.occlusion, st);
+  });
   if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 

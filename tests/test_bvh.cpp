@@ -121,12 +121,7 @@ TEST_CASE("bvh: with spatial splits every backend answers as with object splits,
           const auto rb = test::CheckTracer(scene, cfg, rays, occlusion, &b);
           CHECK(ra.wrong == 0);
           CHECK(rb.wrong == 0);
-          REQUIRE(a.size() == b.size());
-          std::size_t differ = 0;
-          for (std::size_t i = 0; i < a.size(); ++i)
-            differ += occlusion ? (a[i].prim == CR_NO_HIT) != (b[i].prim == CR_NO_HIT)
-                                : std::memcmp(&a[i], &b[i], sizeof(HitRecord)) != 0;
-          CHECK(differ == 0);
+          CHECK(test::CountDiffering(a, b, occlusion) == 0);
         }
       }
     }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -121,6 +122,18 @@ inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int siz
 }
 
 inline bool IsOcclusion(RayKind kind) { return kind == RayKind::Shadow; }
+
+// The rays whose answers differ: bit for bit, or for occlusion hit against
+// miss (which primitive answers an any-hit query is the traversal's).
+inline std::size_t CountDiffering(const std::vector<HitRecord>& a, const std::vector<HitRecord>& b, bool occlusion)
+{
+  REQUIRE(a.size() == b.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    differ += occlusion ? (a[i].prim == CR_NO_HIT) != (b[i].prim == CR_NO_HIT)
+                        : std::memcmp(&a[i], &b[i], sizeof(HitRecord)) != 0;
+  return differ;
+}
 
 // Traces `rays` with `config` and checks every answer against the reference.
 inline ref::CheckResult CheckTracer(const Scene& scene, const TraceConfig& config, const std::vector<RayRecord>& rays,
