@@ -111,7 +111,7 @@ TEST_CASE("rays reader rejects each malformed record with file and record index"
   }
 }
 
-TEST_CASE("check: the reference agrees with itself; every corrupted answer is reported")
+TEST_CASE("check: the reference agrees with itself, and every corrupted answer is reported")
 {
   const Scene& scene = test::CachedScene(test::SpdPath("balls"));
   const auto& ref = test::CachedReference(scene);
@@ -164,7 +164,7 @@ TEST_CASE("check: the reference agrees with itself; every corrupted answer is re
   CHECK(oc.wrong >= blocked - blocked / 50);
 }
 
-TEST_CASE("check: the tolerance belongs to the ray and its hit, not to the primitive; flips are never agreement")
+TEST_CASE("check: the tolerance belongs to the ray and its hit, not to the primitive, and flips are never agreement")
 {
   // A ground sphere of radius 1e6 (top at y = 0) and a unit sphere on it.
   Scene scene;

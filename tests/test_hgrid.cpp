@@ -62,7 +62,7 @@ int CheckLayout(const HGridData& h)
 
 }  // namespace
 
-TEST_CASE("hgrid: the teapot in a stadium refines where it crowds; answers 0 wrong on scalar and simd")
+TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0 wrong on scalar and simd")
 {
   const Scene scene = GenerateStadium(3);
   AccelInfo info;
@@ -102,7 +102,7 @@ TEST_CASE("hgrid: the teapot in a stadium refines where it crowds; answers 0 wro
     }
 }
 
-TEST_CASE("hgrid: SPD scenes build a valid layout; densities are checked")
+TEST_CASE("hgrid: SPD scenes build a valid layout, and bad densities are input errors")
 {
   for (const char* name : {"balls", "teapot", "tree"}) {
     CAPTURE(name);
