@@ -90,7 +90,8 @@ TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the referenc
     MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2; the simd backend runs its scalar fallback only");
     return;
   }
-  std::uint64_t totalTies[3] = {}, totalOtherOccluders[3] = {}, totalRays[3] = {};
+  constexpr std::size_t kAccels = std::size(kAccelKinds);
+  std::uint64_t totalTies[kAccels] = {}, totalOtherOccluders[kAccels] = {}, totalRays[kAccels] = {};
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : kKinds) {
