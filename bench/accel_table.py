@@ -97,7 +97,13 @@ def main():
   balls, gears, teapot, tree, before the surface area rule was added: 0.25 and 2 at 1.13 of each row's
   best in geometric mean, the uniform grid
   0.82, the BVH 0.21). Every level is walked by the uniform grid's 3D-DDA; a child's walk starts at the
-  parameter where its parent's walk entered the cell.
+  parameter where its parent's walk entered the cell. Margins belong to the ray: the root takes its
+  references with the uniform grid's epsilon (2^-18 of the scene's scale), each child with 1/32 of its
+  cell side; a cell that holds a child also keeps its own references, and a ray walks the child only
+  where its float walk's possible error at the cell's exit (8 ulps of the distance travelled,
+  `HGrid_Reach`) is within the child's margin, else it tests the cell's references. Children may so be
+  finer than the scene's epsilon (cells down to 2^-14 of their own coordinates): on the teapot in a
+  stadium (`gen:stadium:4`, primary rays) the tests per ray fell from 155 to 7.7.
 
 Per-ray measures: N_IT intersection tests, N_TS traversal steps (cells or nodes visited), N_ETS leaves
 visited, N_EETS empty leaves visited; averaged over 512² primary rays and 262,144 shadow rays

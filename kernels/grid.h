@@ -94,16 +94,11 @@ CR_FUNC uint Grid_CellIndex(CR_GLOBAL const GridHeader* grid, const int cell[3])
   return (uint)cell[0] + grid->res[0] * ((uint)cell[1] + grid->res[1] * (uint)cell[2]);
 }
 
-/* One step of the walk, after the current cell's references were tested:
- * 0 when the walk ends (the closest hit so far, hitT, or tmax lies at or
- * before the cell's exit, or the exit face is the grid's), else 1 with
- * `cell` moved to the neighbour across the exit face. `cell` is left as it
- * was when the walk ends; *tExitOut is the cell's exit parameter (the next
- * cell's entry) either way. Straight-line code (selects, no indexing by a
- * computed axis) so that a packet's lanes can run it side by side. */
-CR_FUNC int Grid_Step(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3], real* tExitOut)
+/* The exit parameter of cell `cell` (the smallest crossing parameter of its
+ * three exit planes) and the axis of its exit face (x before y before z on
+ * ties). */
+CR_FUNC real Grid_CellExit(CR_GLOBAL const GridHeader* grid, const Ray* ray, const int cell[3], int* axisOut)
 {
-  /* Exit face: the smallest crossing parameter of the three exit planes. */
   int axis = 0;
   real tExit = (real)CR_INF;
   CR_UNROLL for (int a = 0; a < 3; ++a) {
@@ -114,6 +109,21 @@ CR_FUNC int Grid_Step(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hit
       axis = a;
     }
   }
+  *axisOut = axis;
+  return tExit;
+}
+
+/* One step of the walk, after the current cell's references were tested:
+ * 0 when the walk ends (the closest hit so far, hitT, or tmax lies at or
+ * before the cell's exit, or the exit face is the grid's), else 1 with
+ * `cell` moved to the neighbour across the exit face. `cell` is left as it
+ * was when the walk ends; *tExitOut is the cell's exit parameter (the next
+ * cell's entry) either way. Straight-line code (selects, no indexing by a
+ * computed axis) so that a packet's lanes can run it side by side. */
+CR_FUNC int Grid_Step(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3], real* tExitOut)
+{
+  int axis;
+  const real tExit = Grid_CellExit(grid, ray, cell, &axis);
   /* hitT is the closest hit so far, or tmax: either way nothing farther can
    * beat it once the walk has passed it. */
   *tExitOut = tExit;

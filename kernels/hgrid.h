@@ -10,26 +10,44 @@
  * GridHeader):
  *  - the header is the root grid, the nodes the child grids, each a
  *    GridHeader with res, planes and box as a uniform grid's, nRefs the
- *    references below it (the header's 0: nothing to trace), and `first`
- *    the index in refs of its nCells + 1 cell offsets (absolute indices into
- *    refs);
- *  - a cell holds either references (sorted ascending) or exactly one child
- *    marker CR_HGRID_CHILD | k: the cell is child grid nodes[k], whose first
- *    planes are the cell's lower planes, bit for bit, and whose last planes
- *    lie at or just past its upper planes (the builder rounds the cell size
- *    up), so a child covers its cell without a gap.
+ *    references below it (the header's 0: nothing to trace), `first` the
+ *    index in refs of its nCells + 1 cell offsets (absolute indices into
+ *    refs), and `margin` the distance by which its cells took their
+ *    references;
+ *  - a cell holds either references (sorted ascending), or a child marker
+ *    CR_HGRID_CHILD | k followed by the cell's own references: the cell is
+ *    child grid nodes[k], whose first planes are the cell's lower planes,
+ *    bit for bit, and whose last planes lie at or just past its upper planes
+ *    (the builder rounds the cell size up, and the overshoot is within the
+ *    parent's margin), so a child covers its cell without a gap.
  *
  * Every level is walked by the 3D-DDA of kernels/grid.h with its robustness
  * rules (planes recomputed, never accumulated; first cell corrected to the
- * plane parameters); the builder inserts a primitive into every cell it
- * meets at every level, each grown by the uniform grid's epsilon. A child's
- * walk starts at the parameter where its parent's walk entered the cell
- * (Grid_EnterAt: no second box test); when it steps out of the child, the
- * parent's walk goes on from the cell. The walk ends when the closest hit so
- * far lies at or before the current cell's exit (at any level: a child's
- * last planes overshoot its cell by a few ulps, well within the epsilon by
- * which the parent's cell took its references, so nothing beyond the cell
- * is missed), or when it leaves the root. A hit beyond the cell (a
+ * plane parameters). Near an edge or corner of a cell, the float crossing
+ * parameters may order two planes wrongly, and the walk then skips a sliver
+ * of a neighbour that the exact ray crosses. Each crossing parameter
+ * (p - o) * inv is within 3 ulps of the exact one, so the sliver lies
+ * within 6 ulps of the distance travelled, t * max|d|, of the cells the walk
+ * visits: a walk is conservative where the cells took their references
+ * with a margin at least that (HGrid_Reach, with 8 ulps). That is a bound
+ * of the ray, not of the scene: a ray traced from near a teapot strays by
+ * a millionth of the teapot, one from across the stadium by a millionth of
+ * the stadium. So the root takes its references with the uniform grid's
+ * epsilon (relative to the scene's size: every ray that starts within a few
+ * scene sizes), and each child grid with a margin of its own, a small part
+ * of its cells (host/accel/hgrid_builder.cpp): the walk descends into a
+ * child only where the ray's reach at the cell's exit is within the
+ * child's margin, and otherwise tests the cell's own references, which the
+ * parent took with its larger margin. Fine cells serve the rays that come
+ * near, and no ray walks cells finer than its own precision.
+ *
+ * A child's walk starts at the parameter where its parent's walk entered the
+ * cell (Grid_EnterAt: no second box test); when it steps out of the child,
+ * the parent's walk goes on from the cell. The walk ends when the closest
+ * hit so far lies at or before the current cell's exit (at any level: a
+ * child's last planes overshoot its cell by less than the parent's margin,
+ * by which the parent's cell took its references, so nothing beyond the
+ * cell is missed), or when it leaves the root. A hit beyond the cell (a
  * primitive spanning cells) is kept while the walk goes on, as in the
  * uniform grid.
  *
@@ -48,6 +66,15 @@
 #endif
 
 #if CR_WITH_HGRID
+
+/* How far a float walk of the ray may stray from the exact ray up to
+ * parameter t: CR_HGRID_RAY_ERR (8 float ulps) of the distance travelled,
+ * per coordinate. */
+CR_FUNC real HGrid_Reach(const Ray* ray, real t)
+{
+  const real d = fmax(fabs(ray->dir[0]), fmax(fabs(ray->dir[1]), fabs(ray->dir[2])));
+  return (real)CR_HGRID_RAY_ERR * d * t;
+}
 
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * hierarchical grid; `hit` must come from Hit_Init. */
@@ -70,16 +97,22 @@ CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridH
     CR_COUNT(st, nTS);
     CR_GLOBAL const uint* cellStart = refs + g->first;
     const uint idx = Grid_CellIndex(g, cell);
-    const uint begin = cellStart[idx], end = cellStart[idx + 1u];
-    if (end - begin == 1u && (refs[begin] & CR_HGRID_CHILD) != 0u) {
-      CR_ASSERT(sp < CR_HGRID_MAX_DEPTH);
-      stackGrid[sp] = gi;
-      CR_UNROLL for (int a = 0; a < 3; ++a) stackCell[3 * sp + a] = cell[a];
-      ++sp;
-      gi = refs[begin] & ~CR_HGRID_CHILD;
-      g = subs + gi;
-      Grid_EnterAt(g, ray, tEnter, cell);
-      continue;
+    uint begin = cellStart[idx];
+    const uint end = cellStart[idx + 1u];
+    if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
+      const uint child = refs[begin] & ~CR_HGRID_CHILD;
+      int exitAxis;
+      if (HGrid_Reach(ray, Grid_CellExit(g, ray, cell, &exitAxis)) <= (real)subs[child].margin) {
+        CR_ASSERT(sp < CR_HGRID_MAX_DEPTH);
+        stackGrid[sp] = gi;
+        CR_UNROLL for (int a = 0; a < 3; ++a) stackCell[3 * sp + a] = cell[a];
+        ++sp;
+        gi = child;
+        g = subs + gi;
+        Grid_EnterAt(g, ray, tEnter, cell);
+        continue;
+      }
+      ++begin; /* finer than the ray's precision: the cell's own references */
     }
     CR_COUNT(st, nLeaves);
     if (begin == end) CR_COUNT(st, nEmptyLeaves);

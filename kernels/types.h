@@ -169,14 +169,19 @@ typedef struct {
   float cellSize[3];
   uint first;
   uint res[3];
-  uint pad1;
+  /* Hierarchical grid: the distance by which cells took their references
+   * (0 in the uniform grid, which does not read it). */
+  float margin;
 } GridHeader;
 
 /* Hierarchical grid (kernels/hgrid.h): levels below the root grid (the
- * builder's limit and the walk's stack depth), and the marker of a cell that
- * is a child grid (its one reference is CR_HGRID_CHILD | node index). */
+ * builder's limit and the walk's stack depth), the marker of a cell that is
+ * a child grid (its first item is CR_HGRID_CHILD | node index, the cell's
+ * own references follow), and the bound on a float walk's error per unit
+ * of distance travelled (2^-21: 8 units in the last place, HGrid_Reach). */
 #define CR_HGRID_MAX_DEPTH 4
 #define CR_HGRID_CHILD 0x80000000u
+#define CR_HGRID_RAY_ERR 4.76837158203125e-07f
 
 /* Octree node, 16 bytes. childMask != 0: interior node; its non-empty children
  * are stored in octant order starting at `first`, child of octant o at

@@ -29,6 +29,8 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
   const std::uint32_t* refs = sc.hgridRefs;
   int step[3];
   for (int a = 0; a < 3; ++a) step[a] = ray.inv[a] < 0.0f ? -1 : 1;
+  const float reachPerT =
+      CR_HGRID_RAY_ERR * std::max(std::fabs(ray.dir[0]), std::max(std::fabs(ray.dir[1]), std::fabs(ray.dir[2])));
   // The grid walked, in locals: header, cell offsets, cell, next crossings,
   // cell index, its change per step and the resolution; the ancestors' on
   // the stack (what follows from the header is recomputed when popped).
@@ -65,20 +67,28 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
   enterCell(first);
   for (;;) {
     if constexpr (kStats) ++st.nTS;
-    const std::uint32_t begin = cellStart[idx], end = cellStart[idx + 1];
-    if (end - begin == 1u && (refs[begin] & CR_HGRID_CHILD) != 0u) {
-      Saved& s = stack[sp++];
-      s.g = g;
-      for (int a = 0; a < 3; ++a) {
-        s.cell[a] = cell[a];
-        s.tNext[a] = tNext[a];
+    std::uint32_t begin = cellStart[idx];
+    const std::uint32_t end = cellStart[idx + 1];
+    if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
+      const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
+      // HGrid_Reach at the cell's exit (Grid_CellExit: the smallest of the
+      // next crossings, as the scalar walk computes them).
+      const float tExit = std::min(tNext[0], std::min(tNext[1], tNext[2]));
+      if (reachPerT * tExit <= child->margin) {
+        Saved& s = stack[sp++];
+        s.g = g;
+        for (int a = 0; a < 3; ++a) {
+          s.cell[a] = cell[a];
+          s.tNext[a] = tNext[a];
+        }
+        s.idx = idx;
+        setGrid(child);
+        int c[3];
+        GridSingle_EnterAt(*g, ray, tEnter, c);
+        enterCell(c);
+        continue;
       }
-      s.idx = idx;
-      setGrid(sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD));
-      int c[3];
-      GridSingle_EnterAt(*g, ray, tEnter, c);
-      enterCell(c);
-      continue;
+      ++begin;  // finer than the ray's precision: the cell's own references
     }
     if constexpr (kStats) ++st.nLeaves;
     if (begin == end) {

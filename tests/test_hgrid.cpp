@@ -18,9 +18,10 @@ using namespace cr;
 namespace {
 
 // Checks the flat layout: every grid's offsets ascend inside refs, a cell is
-// references (ascending, below the marker bit) or one child marker, every
-// child is named by exactly one cell and lies at or past its cell's planes;
-// returns the number of levels.
+// references (ascending, below the marker bit), or a child marker and then
+// references; every child is named by exactly one cell, lies at or past its
+// cell's planes, and took its references with a margin above 0 and at most
+// its parent's; returns the number of levels.
 int CheckLayout(const HGridData& h)
 {
   const std::size_t nRefs = h.refs.size();
@@ -33,11 +34,15 @@ int CheckLayout(const HGridData& h)
       const std::uint32_t begin = h.refs[g.first + c], end = h.refs[g.first + c + 1];
       REQUIRE(begin <= end);
       REQUIRE(end <= nRefs);
-      if (end - begin == 1 && (h.refs[begin] & CR_HGRID_CHILD)) {
+      std::uint32_t first = begin;
+      if (end > begin && (h.refs[begin] & CR_HGRID_CHILD)) {
         const std::uint32_t k = h.refs[begin] & ~CR_HGRID_CHILD;
         REQUIRE(k < h.subs.size());
         ++namedBy[k];
         const GridHeader& child = h.subs[k];
+        CHECK(child.margin > 0.0f);
+        CHECK(child.margin <= g.margin);
+        ++first;
         const std::uint32_t xyz[3] = {c % g.res[0], (c / g.res[0]) % g.res[1], c / (g.res[0] * g.res[1])};
         for (int a = 0; a < 3; ++a) {
           // The child's box is the cell's, its last plane at or past the cell's.
@@ -45,11 +50,10 @@ int CheckLayout(const HGridData& h)
           CHECK(child.bmax[a] >= g.bmin[a] + float(xyz[a] + 1) * g.cellSize[a]);
         }
         deepest = std::max(deepest, walk(child, depth + 1));
-      } else {
-        for (std::uint32_t i = begin; i < end; ++i) {
-          CHECK((h.refs[i] & CR_HGRID_CHILD) == 0u);
-          if (i > begin) CHECK(h.refs[i - 1] < h.refs[i]);
-        }
+      }
+      for (std::uint32_t i = first; i < end; ++i) {
+        CHECK((h.refs[i] & CR_HGRID_CHILD) == 0u);
+        if (i > first) CHECK(h.refs[i - 1] < h.refs[i]);
       }
     }
     return deepest;
@@ -100,6 +104,41 @@ TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0
       // miss).
       CHECK(test::CountDiffering(a, b, occlusion) == 0);
     }
+}
+
+TEST_CASE("hgrid: rays from across the stadium test a crowded cell's own references, 0 wrong")
+{
+  // Rays from the stadium's pillars to the sphereflake: their float walk
+  // strays by more than the finest children's margins, so they must test
+  // the references of the cells holding those children instead (and the
+  // near rays of the first test must walk the children).
+  const Scene scene = GenerateStadium(3);
+  std::vector<RayRecord> rays;
+  for (int i = 0; i < 4096; ++i) {
+    const double a = 6.283185307179586 * i / 4096.0;
+    const glm::dvec3 from(4400.0 * std::cos(a), 4400.0 * std::sin(a), 30.0 + 7.0 * (i % 13));
+    const glm::dvec3 to(0.11 * std::sin(3.0 * i), 0.11 * std::cos(5.0 * i), 0.12 * std::sin(7.0 * i));
+    const glm::dvec3 d = to - from;
+    rays.push_back(RayRecord{{float(from.x), float(from.y), float(from.z)}, 0.0f,
+                             {float(d.x), float(d.y), float(d.z)}, INFINITY});
+  }
+  std::size_t hits = 0;
+  for (Backend backend : {Backend::Scalar, Backend::Simd})
+    for (bool occlusion : {false, true}) {
+      CAPTURE(BackendName(backend));
+      CAPTURE(occlusion);
+      TraceConfig cfg;
+      cfg.backend = backend;
+      cfg.accel = AccelKind::HGrid;
+      std::vector<HitRecord> a, b;
+      const ref::CheckResult r = test::CheckTracer(scene, cfg, rays, occlusion, &a);
+      CHECK(r.wrong == 0);
+      cfg.accel = AccelKind::Grid;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &b).wrong == 0);
+      CHECK(test::CountDiffering(a, b, occlusion) == 0);
+      for (const HitRecord& h : a) hits += h.prim != CR_NO_HIT;
+    }
+  CHECK(hits > rays.size());
 }
 
 TEST_CASE("hgrid: SPD scenes build a valid layout, and bad densities are input errors")

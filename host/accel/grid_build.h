@@ -28,12 +28,14 @@ namespace grid_plane {
 
 namespace gridbuild {
 
-// Cells per primitive when --grid-density is 0: the best overall value of
+// The fixed density that was the default before the cost model
+// (ChooseResolutionByCost): the best overall value of
 // bench/grid_density_sweep.sh (SPD scenes, primary and shadow rays, scalar
 // backend, one thread) in three runs out of three, geometric mean of
 // time / best 1.13-1.21 against 1.23-1.37 for 4 and 1.22-1.30 for 8. Scenes
 // with a small object on a large ground (tree, balls) want more cells, the
-// compact ones 2 to 8.
+// compact ones 2 to 8: what the cost model tells apart. The hierarchical
+// grid's root and its tests use fixed densities.
 constexpr double kDefaultDensity = 16.0;
 constexpr double kMaxDensity = 1024.0;
 constexpr int kMaxResAxis = 4096;
@@ -137,6 +139,12 @@ inline void CapResolution(Res& res, const glm::vec3& lo, const glm::dvec3& hi, d
   }
 }
 
+// The resolution of a uniform grid over f by the cost model of
+// grid_cost.cpp (the default): density gets the chosen cells per primitive,
+// costs (if given) each candidate's (density, estimated cost per ray).
+Res ChooseResolutionByCost(const Scene& scene, const Frame& f, const std::vector<Bounds>& boxes, double& density,
+                           std::vector<std::pair<double, double>>* costs = nullptr);
+
 // The header for box [lo, hi] at resolution res: cellSize rounded up until
 // the last plane covers hi; bmax is that plane, so the box the traversal
 // clips against and the planes it walks agree.
@@ -188,22 +196,28 @@ struct Builder {
   {
     ForEachCellOf(header, g, visit);
   }
-  // The same for the cells of the grid h.
+  // The same for the cells of the grid h, each grown by `grow` (eps by
+  // default).
   template <class Visit>
   void ForEachCellOf(const GridHeader& h, std::uint32_t g, const Visit& visit) const
   {
+    ForEachCellOf(h, g, eps, visit);
+  }
+  template <class Visit>
+  void ForEachCellOf(const GridHeader& h, std::uint32_t g, double grow, const Visit& visit) const
+  {
     int first[3], last[3];
-    for (int a = 0; a < 3; ++a) CellRange(h, a, boxes[g].lo[a], boxes[g].hi[a], eps, first[a], last[a]);
+    for (int a = 0; a < 3; ++a) CellRange(h, a, boxes[g].lo[a], boxes[g].hi[a], grow, first[a], last[a]);
     auto slice = [&](int z) {
       glm::dvec3 lo, hi;
-      lo.z = double(grid_plane::Grid_Plane(&h, 2, z)) - eps;
-      hi.z = double(grid_plane::Grid_Plane(&h, 2, z + 1)) + eps;
+      lo.z = double(grid_plane::Grid_Plane(&h, 2, z)) - grow;
+      hi.z = double(grid_plane::Grid_Plane(&h, 2, z + 1)) + grow;
       for (int y = first[1]; y <= last[1]; ++y) {
-        lo.y = double(grid_plane::Grid_Plane(&h, 1, y)) - eps;
-        hi.y = double(grid_plane::Grid_Plane(&h, 1, y + 1)) + eps;
+        lo.y = double(grid_plane::Grid_Plane(&h, 1, y)) - grow;
+        hi.y = double(grid_plane::Grid_Plane(&h, 1, y + 1)) + grow;
         for (int x = first[0]; x <= last[0]; ++x) {
-          lo.x = double(grid_plane::Grid_Plane(&h, 0, x)) - eps;
-          hi.x = double(grid_plane::Grid_Plane(&h, 0, x + 1)) + eps;
+          lo.x = double(grid_plane::Grid_Plane(&h, 0, x)) - grow;
+          hi.x = double(grid_plane::Grid_Plane(&h, 0, x + 1)) + grow;
           if (PrimOverlapsBox(scene, ranges, g, lo, hi))
             visit(std::uint32_t(x) + h.res[0] * (std::uint32_t(y) + h.res[1] * std::uint32_t(z)));
         }

@@ -11,10 +11,12 @@
 // are its cell's lower planes, bit for bit; its cell size is rounded up
 // until its last planes reach the cell's upper planes (MakeHeader), so the
 // children cover their cells without gaps. A reference goes into every cell
-// its shape meets at every level, each grown by the uniform grid's epsilon
-// (host/accel/grid_build.h), and cells are filled in ascending reference
-// order, so their references come sorted. The root's cells are refined in
-// parallel.
+// its shape meets at every level, each grown by its grid's margin: the
+// uniform grid's epsilon at the root (host/accel/grid_build.h), a part of
+// the cell size in a child (kMarginPerCell; why a child's margin may be
+// smaller than the root's: kernels/hgrid.h). Cells are filled in ascending
+// reference order, so their references come sorted. The root's cells are
+// refined in parallel.
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -40,9 +42,14 @@ constexpr double kDefaultSubDensity = 2.0;
 constexpr double kMaxSubDensity = 1024.0;
 // A cell with more references than this gets a child grid (--hgrid-leaf).
 constexpr int kDefaultLeafRefs = 8;
-// A child's cells are at least twice the epsilon wide (the uniform grid's
-// are four times: a hierarchy refines only where references crowd).
-constexpr double kMinChildCell = 0x1p-17;
+// A child's cells are at least 2^-14 of its coordinates' magnitude wide
+// (512 float ulps: planes stay distinct), and take their references with a
+// margin of 1/32 of their smallest side (a surface meets about 13% more of
+// them than with none), at most the parent's margin. A ray walks a child
+// while its reach (kernels/hgrid.h HGrid_Reach) is within that margin: up to
+// 2^16 cell sides from its origin.
+constexpr double kMinChildCellRel = 0x1p-14;
+constexpr double kMarginPerCell = 1.0 / 32.0;
 // The cost of a cell step against a primitive test, and the most copies of
 // a cell's references a child may hold (BuildChild).
 constexpr double kStepCost = 1.0;
@@ -61,14 +68,28 @@ double Density(double d, double def, double max, const char* option)
   return d;
 }
 
-// One grid while building: its header, cell offsets into `items`, and each
-// cell's references, or for a child cell the marker CR_HGRID_CHILD | k with
-// k the child's ordinal in `children`.
+// One grid while building: its header, cell offsets into `items`, each
+// cell's references, its child grids, and for each cell 0 or 1 + the
+// ordinal in `children` of its child (empty while it has none); `node` is
+// its index among all grids, the root 0 (Collect).
 struct GridBuild {
   GridHeader h{};
   std::vector<std::uint32_t> start;
   std::vector<std::uint32_t> items;
   std::vector<std::unique_ptr<GridBuild>> children;
+  std::vector<std::uint32_t> childAt;
+  std::size_t node = 0;
+
+  void SetChild(std::uint32_t c, std::unique_ptr<GridBuild> child)
+  {
+    if (childAt.empty()) childAt.assign(h.nCells, 0u);
+    children.push_back(std::move(child));
+    childAt[c] = std::uint32_t(children.size());
+  }
+  const GridBuild* ChildOf(std::uint32_t c) const
+  {
+    return childAt.empty() || childAt[c] == 0 ? nullptr : children[childAt[c] - 1].get();
+  }
 };
 
 struct Context {
@@ -91,20 +112,33 @@ void CellBox(const GridHeader& h, std::uint32_t c, glm::vec3& lo, glm::dvec3& hi
 }
 
 // A child grid over [lo, hi] for the references `refs` (ascending), at
-// level `depth`; nullptr when it would separate nothing.
+// level `depth`, in a cell that took them with margin parentMargin; nullptr
+// when it would separate nothing.
 std::unique_ptr<GridBuild> BuildChild(const Context& cx, const glm::vec3& lo, const glm::dvec3& hi,
-                                      const std::uint32_t* refs, std::uint32_t n, int depth)
+                                      const std::uint32_t* refs, std::uint32_t n, int depth, double parentMargin)
 {
   Res res = ChooseResolution(hi - glm::dvec3(lo), cx.subDensity * double(n));
-  CapResolution(res, lo, hi, cx.f.scale, kMinChildCell);
+  const glm::dvec3 absMax = glm::max(glm::abs(glm::dvec3(lo)), glm::abs(hi));
+  CapResolution(res, lo, hi, std::max(absMax.x, std::max(absMax.y, absMax.z)), kMinChildCellRel);
   while (res.Cells() > kMaxChildCells)
     for (int a = 0; a < 3; ++a) res.r[a] = std::max(1, res.r[a] / 2);
   if (res.Cells() == 1) return nullptr;
   auto g = std::make_unique<GridBuild>();
   g->h = MakeHeader(lo, hi, res);
+  // The margin; the child's last planes overshoot the cell by a few ulps,
+  // which the parent's margin must cover (kernels/hgrid.h).
+  double cellMin = INFINITY, overshoot = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    cellMin = std::min(cellMin, double(g->h.cellSize[a]));
+    overshoot = std::max(overshoot, double(g->h.bmax[a]) - hi[a]);
+  }
+  if (!(2.0 * overshoot < parentMargin)) return nullptr;
+  const double margin = double(RoundDown(std::min(parentMargin, std::max(kMarginPerCell * cellMin, 2.0 * overshoot))));
+  g->h.margin = float(margin);
   const std::uint32_t nCells = g->h.nCells;
   g->start.assign(nCells + std::size_t(1), 0u);
-  for (std::uint32_t i = 0; i < n; ++i) cx.b.ForEachCellOf(g->h, refs[i], [&](std::uint32_t k) { ++g->start[k]; });
+  for (std::uint32_t i = 0; i < n; ++i)
+    cx.b.ForEachCellOf(g->h, refs[i], margin, [&](std::uint32_t k) { ++g->start[k]; });
   std::uint64_t sum = 0;
   for (std::uint32_t k = 0; k < nCells; ++k) {
     const std::uint32_t m = g->start[k];
@@ -127,7 +161,7 @@ std::unique_ptr<GridBuild> BuildChild(const Context& cx, const glm::vec3& lo, co
   std::vector<std::uint32_t> fill(g->start.begin(), g->start.end() - 1);
   for (std::uint32_t i = 0; i < n; ++i) {
     const std::uint32_t r = refs[i];
-    cx.b.ForEachCellOf(g->h, r, [&](std::uint32_t k) { g->items[fill[k]++] = r; });
+    cx.b.ForEachCellOf(g->h, r, margin, [&](std::uint32_t k) { g->items[fill[k]++] = r; });
   }
   g->h.nRefs = std::uint32_t(sum);
   if (depth < CR_HGRID_MAX_DEPTH)
@@ -144,22 +178,15 @@ void Refine(const Context& cx, GridBuild& grid, std::uint32_t c, int depth)
   glm::vec3 lo;
   glm::dvec3 hi;
   CellBox(grid.h, c, lo, hi);
-  std::unique_ptr<GridBuild> child = BuildChild(cx, lo, hi, grid.items.data() + begin, end - begin, depth + 1);
-  if (!child) return;
-  // The cell's references stay in items until the grid is laid out; the
-  // marker's position is its first item (the layout keeps only that one).
-  grid.items[begin] = CR_HGRID_CHILD | std::uint32_t(grid.children.size());
-  grid.children.push_back(std::move(child));
+  std::unique_ptr<GridBuild> child =
+      BuildChild(cx, lo, hi, grid.items.data() + begin, end - begin, depth + 1, double(grid.h.margin));
+  if (child) grid.SetChild(c, std::move(child));
 }
 
-bool IsChildCell(const GridBuild& g, std::uint32_t c)
-{
-  return g.start[c + 1] > g.start[c] && (g.items[g.start[c]] & CR_HGRID_CHILD) != 0u;
-}
-
-// Every grid, depth first, the root at 0; each child's index follows.
+// Every grid, depth first, the root at 0 (GridBuild::node).
 void Collect(GridBuild& g, std::vector<GridBuild*>& all)
 {
+  g.node = all.size();
   all.push_back(&g);
   for (auto& c : g.children) Collect(*c, all);
 }
@@ -190,6 +217,7 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
     const Frame f = MakeFrame(b.boxes);
     b.eps = f.eps;
     const Context cx{b, f, subDensity, leafRefs};
+    root.h.margin = RoundDown(f.eps);
     // Children are built per root cell in parallel, then numbered in cell
     // order (deterministic whatever the threads).
     std::vector<std::unique_ptr<GridBuild>> perCell(root.h.nCells);
@@ -200,23 +228,20 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
         glm::vec3 lo;
         glm::dvec3 hi;
         CellBox(root.h, c, lo, hi);
-        perCell[c] = BuildChild(cx, lo, hi, root.items.data() + begin, end - begin, 1);
+        perCell[c] = BuildChild(cx, lo, hi, root.items.data() + begin, end - begin, 1, f.eps);
       });
     } catch (const std::bad_alloc&) {
       throw RuntimeError("hgrid: out of memory for the child grids");
     }
     for (std::uint32_t c = 0; c < root.h.nCells; ++c)
-      if (perCell[c]) {
-        root.items[root.start[c]] = CR_HGRID_CHILD | std::uint32_t(root.children.size());
-        root.children.push_back(std::move(perCell[c]));
-      }
+      if (perCell[c]) root.SetChild(c, std::move(perCell[c]));
   }
 
   // Layout: every grid's cell offsets (root first), then every grid's items;
-  // a child cell keeps one item, its marker with the child's node index.
+  // a child cell's items are its marker, with the child's node index, then
+  // its own references.
   std::vector<GridBuild*> all;
   Collect(root, all);
-  std::vector<std::uint32_t> nodeOf(all.size());  // all[i]'s index in subs (i - 1)
   std::uint64_t nOffsets = 0, nItems = 0, nRefs = 0, nCells = 0, emptyCells = 0, childCells = 0;
   std::vector<std::uint64_t> offsetAt(all.size()), itemAt(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) {
@@ -226,36 +251,26 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
     nCells += g.h.nCells;
     for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
       const std::uint32_t k = g.start[c + 1] - g.start[c];
-      if (IsChildCell(g, c)) {
-        ++nItems;
+      if (g.ChildOf(c)) {
         ++childCells;
+        ++nItems;
       } else {
-        nItems += k;
         nRefs += k;
         emptyCells += k == 0;
       }
+      nItems += k;
     }
   }
-  for (std::size_t i = 0, at = std::size_t(nOffsets); i < all.size(); ++i) {
-    itemAt[i] = at;
-    const GridBuild& g = *all[i];
-    for (std::uint32_t c = 0; c < g.h.nCells; ++c) at += IsChildCell(g, c) ? 1 : g.start[c + 1] - g.start[c];
+  {
+    std::uint64_t at = nOffsets;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      itemAt[i] = at;
+      const GridBuild& g = *all[i];
+      at += g.start[g.h.nCells] + (g.childAt.empty() ? 0 : g.children.size());
+    }
   }
   if (nOffsets + nItems >= std::uint64_t(CR_HGRID_CHILD))
     throw RuntimeError(fmt::format("hgrid: {} references and cell offsets do not fit 31-bit indices", nOffsets + nItems));
-  // Child ordinals -> node indices: a grid's children follow it depth first.
-  std::vector<std::vector<std::uint32_t>> childNode(all.size());
-  {
-    std::size_t next = 1;
-    std::function<void(GridBuild&, std::size_t)> walk = [&](GridBuild& g, std::size_t self) {
-      for (auto& c : g.children) {
-        const std::size_t ci = next++;
-        childNode[self].push_back(std::uint32_t(ci - 1));
-        walk(*c, ci);
-      }
-    };
-    walk(root, 0);
-  }
   HGridData out;
   try {
     out.subs.assign(std::max<std::size_t>(all.size() - 1, 1), GridHeader{});
@@ -270,11 +285,8 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
     std::uint32_t* offsets = out.refs.data() + offsetAt[i];
     for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
       offsets[c] = std::uint32_t(at);
-      if (IsChildCell(g, c)) {
-        out.refs[at++] = CR_HGRID_CHILD | childNode[i][g.items[g.start[c]] & ~CR_HGRID_CHILD];
-      } else {
-        for (std::uint32_t k = g.start[c]; k < g.start[c + 1]; ++k) out.refs[at++] = g.items[k];
-      }
+      if (const GridBuild* child = g.ChildOf(c)) out.refs[at++] = CR_HGRID_CHILD | std::uint32_t(child->node - 1);
+      for (std::uint32_t k = g.start[c]; k < g.start[c + 1]; ++k) out.refs[at++] = g.items[k];
     }
     offsets[g.h.nCells] = std::uint32_t(at);
     if (i == 0)
