@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Sweeps the uniform grid's density (cells per primitive, --grid-density) over
 # scenes and ray kinds and prints a table of trace times; the last row is the
-# geometric mean over rows of time / best time of the row, so the density with
-# the lowest value is the best overall. The default in
-# host/accel/grid_builder.cpp was chosen with this script.
+# geometric mean over rows of time / best time of the row (the best of the
+# fixed densities), so the density with the lowest value is the best overall.
+# Density 0 is the cost model (host/accel/grid_cost.cpp, the default), shown
+# as "cost": its row of the mean is its distance from each scene's best
+# fixed density. The former fixed default (16) was chosen with this script.
 #
-# usage: bench/grid_density_sweep.sh [-b CELLRAY] [-d "1 2 4 8 16"] [-k "primary shadow"]
-#                                    [-s 512] [-t 1] [-r 5] [-w WORKDIR] [SCENE...]
+# usage: bench/grid_density_sweep.sh [-b CELLRAY] [-d "0 1 2 4 8 16"] [-k "primary shadow"]
+#                                    [-B scalar] [-s 512] [-t 1] [-r 5] [-w WORKDIR] [SCENE...]
 # Defaults: build/release/bin/cellray, scenes/spd/*.nff, 512x512 primary rays
-# and as many of the other kinds, scalar backend, 1 thread, the fastest of 5
+# and as many of the other kinds, scalar backend (-B: simd, opencl), 1 thread, the fastest of 5
 # runs (the minimum, not the median: on a shared machine other processes only
 # ever add time, so the minimum is the least disturbed figure).
 # Every trace is also checked against the fp64 reference (a wrong answer
@@ -16,17 +18,19 @@
 set -euo pipefail
 
 bin=build/release/bin/cellray
-densities="1 2 4 8 16"
+densities="0 1 2 4 8 16"
+backend=scalar
 kinds="primary shadow"
 size=512
 threads=1
 repeat=5
 work=""
-while getopts "b:d:k:s:t:r:w:h" opt; do
+while getopts "b:d:k:B:s:t:r:w:h" opt; do
   case $opt in
     b) bin=$OPTARG ;;
     d) densities=$OPTARG ;;
     k) kinds=$OPTARG ;;
+    B) backend=$OPTARG ;;
     s) size=$OPTARG ;;
     t) threads=$OPTARG ;;
     r) repeat=$OPTARG ;;
@@ -63,7 +67,7 @@ for scene in "${scenes[@]}"; do
     [ "$kind" = shadow ] && occ=(--occlusion)
     row="$name	$kind"
     for d in $densities; do
-      out=$("$bin" trace "$scene" --rays "$rays" "${occ[@]}" --accel grid --backend scalar --threads "$threads" \
+      out=$("$bin" trace "$scene" --rays "$rays" "${occ[@]}" --accel grid --backend "$backend" --threads "$threads" \
         --grid-density "$d" --repeat "$repeat" -o "$work/hits")
       wrong=$("$bin" check "$scene" --rays "$rays" --hits "$work/hits" "${occ[@]}" | field wrong)
       if [ "$wrong" != 0 ]; then
@@ -77,19 +81,20 @@ for scene in "${scenes[@]}"; do
   done
 done
 
-awk -F'\t' -v repeat="$repeat" -v dens="$densities" -v threads="$threads" -v size="$size" '
-BEGIN { nd = split(dens, D, " ") }
+awk -F'\t' -v repeat="$repeat" -v dens="$densities" -v threads="$threads" -v size="$size" -v backend="$backend" '
+BEGIN { nd = split(dens, D, " "); for (i = 1; i <= nd; i++) L[i] = D[i] == 0 ? "cost" : "d=" D[i] }
 {
   rows++
-  best = $3
-  for (i = 1; i <= nd; i++) if ($(i + 2) < best) best = $(i + 2)
+  best = -1
+  for (i = 1; i <= nd; i++) if (D[i] != 0 && (best < 0 || $(i + 2) < best)) best = $(i + 2)
+  if (best < 0) best = $3
   for (i = 1; i <= nd; i++) lsum[i] += log($(i + 2) / best)
   line[rows] = $0
 }
 END {
-  printf "grid trace time (ms, min of %d), scalar backend, %d thread(s), %dx%d rays per set\n", repeat, threads, size, size
+  printf "grid trace time (ms, min of %d), %s backend, %d thread(s), %dx%d rays per set\n", repeat, backend, threads, size, size
   printf "%-10s %-8s", "scene", "rays"
-  for (i = 1; i <= nd; i++) printf " %10s", "d=" D[i]
+  for (i = 1; i <= nd; i++) printf " %10s", L[i]
   printf "\n"
   for (r = 1; r <= rows; r++) {
     n = split(line[r], F, "\t")
@@ -104,5 +109,5 @@ END {
     printf " %10.3f", g
     if (i == 1 || g < bg) { bg = g; bi = i }
   }
-  printf "\nbest overall: density %s\n", D[bi]
+  printf "\nbest overall: %s\n", L[bi]
 }' "$table"

@@ -17,6 +17,7 @@
 #include "host/core/error.h"
 #include "host/scene/scene.h"
 #include "host/trace/tracer.h"
+#include "tests/test_util.h"
 
 namespace cr {
 namespace test_grid {
@@ -187,6 +188,34 @@ TEST_CASE("grid: builder invariants (layout, sorted refs, every primitive presen
     for (std::uint32_t k = c.grid.cellStart[i]; k < c.grid.cellStart[i + 1]; ++k) cellsOfSphere += c.grid.refs[k] == g;
   CHECK(cellsOfSphere >= 1u);
   CHECK(cellsOfSphere <= 8u);
+}
+
+TEST_CASE("grid: the cost model gives a small object on a large ground more cells per primitive than a cloud")
+{
+  // A cloud of 512 equal spheres filling its box: the rays end after a few
+  // cells whatever the resolution, a coarse grid is enough. SPD tree: a
+  // tree on a ground 6 times its size, which only fine cells separate.
+  std::string cloud = "v\nfrom 0.5 0.5 4\nat 0.5 0.5 0.5\nup 0 1 0\nangle 40\nhither 0\nresolution 64 64\n"
+                      "f 1 1 1 1 0 0 0 1\n";
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 512; ++i) cloud += Sphere3(u(rng), u(rng), u(rng), 0.04);
+  AccelInfo info;
+  const GridData c = BuildGrid(SceneFromNFF(cloud), AccelParams{}, info);
+  MESSAGE("cloud: ", info.params);
+  CHECK(info.params.find("(cost model)") != std::string::npos);
+  const double cloudCells = double(c.header.nCells) / 512.0;
+  const Scene& tree = test::CachedScene(test::SpdPath("tree"));
+  const GridData t = BuildGrid(tree, AccelParams{}, info);
+  MESSAGE("tree: ", info.params);
+  const double treeCells = double(t.header.nCells) / double(tree.NumUnified());
+  CHECK(cloudCells <= 8.0);
+  CHECK(treeCells >= 4.0 * cloudCells);
+  // An explicit density is used as given.
+  AccelParams p;
+  p.gridDensity = 16.0;
+  (void)BuildGrid(tree, p, info);
+  CHECK(info.params.find("density=16 ") == 0);
 }
 
 TEST_CASE("grid: density parameter (default, explicit, absurd values)")

@@ -1,6 +1,7 @@
 // Uniform grid builder. Resolution after Woo (Graphics Gems, "Ray tracing
 // polygons using spatial subdivision") and Klimaszewski: about lambda * N
-// cells, cubic as far as the scene box allows. Each primitive goes into every
+// cells, cubic as far as the scene box allows, lambda chosen per scene by a
+// cost model (grid_cost.cpp) unless --grid-density fixes it. Each primitive goes into every
 // cell its shape overlaps (host/prims/), in two parallel passes over the
 // primitives (count, then fill) into the compressed row layout of GridHeader
 // (types.h), references sorted ascending in each cell.
@@ -28,7 +29,7 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   double density = params.gridDensity;
   if (!std::isfinite(density) || density < 0.0)
     throw InputError(fmt::format("--grid-density {} is not a finite number >= 0", density));
-  if (density == 0.0) density = kDefaultDensity;
+  const bool byCost = density == 0.0;
   if (density > kMaxDensity) {
     Warn(fmt::format("--grid-density {} is too large: using {}", density, kMaxDensity));
     density = kMaxDensity;
@@ -48,7 +49,7 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
     out.cellStart = {0, 0};
     info.nodes = info.leaves = info.emptyLeaves = 1;
     info.bytes = sizeof(GridHeader) + 2 * sizeof(std::uint32_t);
-    info.params = fmt::format("density={} res=1x1x1", density);
+    info.params = "density=0 res=1x1x1";
     return out;
   }
 
@@ -57,8 +58,13 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   tbb::parallel_for(std::uint32_t(0), n, [&](std::uint32_t g) { b.boxes[g] = scene.UnifiedBounds(g); });
   const Frame f = MakeFrame(b.boxes);
   b.eps = f.eps;
-  Res res = ChooseResolution(f.ext, density * double(n));
-  CapResolution(res, f.lo, f.hi, f.scale);
+  Res res;
+  if (byCost) {
+    res = ChooseResolutionByCost(scene, f, b.boxes, density);
+  } else {
+    res = ChooseResolution(f.ext, density * double(n));
+    CapResolution(res, f.lo, f.hi, f.scale);
+  }
   if (res.Cells() > kMaxCells) {
     const Res asked = res;
     const double shrink = std::cbrt(double(kMaxCells) / double(res.Cells()));
@@ -120,7 +126,8 @@ GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& inf
   info.emptyLeaves = empty;
   info.refs = total;
   info.bytes = sizeof(GridHeader) + out.cellStart.size() * sizeof(std::uint32_t) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("density={} res={}x{}x{}", density, res.r[0], res.r[1], res.r[2]);
+  info.params = fmt::format("density={}{} res={}x{}x{}", density, byCost ? " (cost model)" : "", res.r[0], res.r[1],
+                            res.r[2]);
   return out;
 }
 
