@@ -53,19 +53,30 @@ def main():
     out.append("""## Structures and defaults
 
 - **Uniform grid** (`host/accel/grid_builder.cpp`, `kernels/grid.h`): resolution by Woo's /
-  Klimaszewski's heuristic, about λ·N cells shaped to the scene box; default **λ = 16**
-  (`--grid-density`), chosen with `bench/grid_density_sweep.sh` (densities 1..32, 512² primary and
-  262,144 shadow rays, scalar backend, one thread, geometric mean of time ÷ best over the SPD scenes:
-  16 won in three runs, e.g. 1.21 vs 1.26 for 8 and 1.27 for 32; compact scenes prefer 2..8, scenes with
-  a small object on a large ground (tree, balls, rings) gain most from more cells). Primitives are
+  Klimaszewski's heuristic, about λ·N cells shaped to the scene box, **λ chosen per scene by a cost
+  model** (`host/accel/grid_cost.cpp`; `--grid-density λ` fixes it): for λ = 0.5, 1, 2, ..., 256 the
+  grid is modelled by each cell's references (primitive boxes over cells) and coverage (the part of the
+  lines through the cell that meet a surface there, after Crofton: surface area over the cell's), and
+  1024 camera rays and 1024 random lines walk it, paying a step per cell and 2 per reference while they
+  survive the coverage; the cheapest λ wins (it stops two candidates past the minimum). With
+  `bench/grid_density_sweep.sh` (SIMD, one thread, 256² primary and diffuse rays, the 11 SPD scenes),
+  the geometric mean of time ÷ each row's best fixed λ is **1.11** for the cost model against 1.22 for
+  the former fixed default λ = 16 (1.21 for the best fixed λ, 4): compact scenes get 2..8, a small
+  object on a large ground (tree 256, balls 64) many more. Primitives are
   inserted into every cell their exact shape overlaps (triangle–box separating axes, hollow
   sphere–box, cone slab and shell), each cell tested enlarged by 2^-18 of the coordinate scale.
 - **Octree** (`host/accel/octree_builder.cpp`, `kernels/octree.h`): the padded scene cube subdivided
-  until a cell holds at most K references or depth D; defaults **K = 12, D = 10**
+  until a cell holds at most K references or depth D; defaults **K = 12, D = 10** (then the heuristic)
   (`--octree-leaf`, `--octree-depth`), chosen with `bench/octree_param_sweep.sh` (K 4..32, D 8..12,
   primary and shadow rays at 256², scalar, one thread, configurations interleaved per scene: K 12 and 16
   tied within noise and were fastest; 12 makes fewer tests per ray; D 12 only adds memory). A node whose
-  split would multiply its references by 4 or more stays a leaf.
+  split would multiply its references by 4 or more stays a leaf. Below depth 10 a node with more than K
+  references splits on, down to depth 20, only where the surface area heuristic finds it pays (each
+  octant entered with probability 1/4, a node visit costing 12 tests; cells at least 8 paddings wide):
+  on the SPD scenes the tree is the same or nearly (SIMD time 0.98 of the strict D = 10 tree's, within
+  noise), while a crowded leaf at depth 10 splits on (teapot in a stadium, `gen:stadium:4`: 8.7x faster
+  on primary rays, 9.2x on diffuse). `--octree-depth D` restores a hard limit; `--octree-build sah`
+  applies the heuristic at every level instead of K (1.04 of the default's time on the SPD scenes).
 - **BVH** (`host/accel/bvh_builder.cpp`, `kernels/bvh.h`): binned SAH (32 bins, all three axes),
   leaves of at most **4** primitives (`--bvh-leaf`), oneTBB-parallel, 32-byte nodes. The builder
   partitions 32-byte references that carry their boxes (Embree's PrimRef), so each pass reads a node's

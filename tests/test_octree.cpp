@@ -13,6 +13,7 @@
 
 #include "host/accel/accel.h"
 #include "host/core/error.h"
+#include "host/scene/generate.h"
 #include "tests/test_util.h"
 
 using namespace cr;
@@ -297,10 +298,44 @@ TEST_CASE("octree: 1000 coincident spheres stop at the depth limit and keep the 
     }
 }
 
+TEST_CASE("octree: beyond depth 10 a crowded node splits on where the surface area heuristic finds it pays")
+{
+  // The teapot in a stadium: at depth 10 a cell is 15 units wide and holds
+  // the whole sphereflake; the default goes on down where splitting pays.
+  const Scene scene = GenerateStadium(3);
+  AccelInfo info;
+  const OctreeData fixed = BuildOctree(scene, Params(12, 10), info);
+  CHECK(fixed.header.maxDepth == 10u);
+  const OctreeData deep = BuildOctree(scene, AccelParams{}, info);
+  INFO(info.params);
+  CHECK(deep.header.maxDepth > 12u);
+  CHECK(info.params.find("depth=10+sah..20") != std::string::npos);
+  const auto rays = test::MakeRays(scene, RayKind::Diffuse, 48);
+  TraceStatsSum a, b;
+  (void)Trace(scene, Params(12, 10), Precision::Robust, rays, false, &a);
+  (void)Trace(scene, AccelParams{}, Precision::Robust, rays, false, &b);
+  MESSAGE("tests per diffuse ray: depth 10 ", double(a.nIT) / rays.size(), ", default ", double(b.nIT) / rays.size());
+  CHECK(b.nIT * 4 < a.nIT);
+  TraceConfig cfg;
+  cfg.accel = AccelKind::Octree;
+  for (Backend backend : {Backend::Scalar, Backend::Simd})
+    for (bool occlusion : {false, true}) {
+      cfg.backend = backend;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion).wrong == 0);
+    }
+  // The heuristic everywhere (--octree-build sah) answers alike.
+  cfg.backend = Backend::Scalar;
+  cfg.params.octreeBuild = "sah";
+  CHECK(test::CheckTracer(scene, cfg, rays, false).wrong == 0);
+}
+
 TEST_CASE("octree: parameters are validated")
 {
   const Scene scene = SceneFromNFF(Frame());
   AccelInfo info;
+  AccelParams bad;
+  bad.octreeBuild = "deep";
+  CHECK_THROWS_AS(BuildOctree(scene, bad, info), InputError);
   CHECK_THROWS_AS(BuildOctree(scene, Params(-1, 0), info), InputError);
   CHECK_THROWS_AS(BuildOctree(scene, Params(0, -1), info), InputError);
   CHECK_THROWS_AS(BuildOctree(scene, Params(0, CR_OCTREE_MAX_DEPTH + 1), info), InputError);

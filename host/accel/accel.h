@@ -37,6 +37,10 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
   X(gridDensity, double, "--grid-density", "Grid cells per primitive (Woo/Klimaszewski lambda)") \
   X(octreeLeaf, int, "--octree-leaf", "Max references per octree leaf")                        \
   X(octreeDepth, int, "--octree-depth", "Max octree depth")                                    \
+  X(octreeBuild, std::string, "--octree-build",                                                 \
+    "Octree subdivision: leaf (more than --octree-leaf references split; by default down to depth 10 and " \
+    "on to 20 where the surface area heuristic finds it pays; --octree-depth D: down to D) or sah (the " \
+    "heuristic everywhere)")                                                                    \
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \
