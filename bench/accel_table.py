@@ -72,10 +72,10 @@ def main():
   tied within noise and were fastest; 12 makes fewer tests per ray; D 12 only adds memory). A node whose
   split would multiply its references by 4 or more stays a leaf. Below depth 10 a node with more than K
   references splits on, down to depth 20, only where the surface area heuristic finds it pays (each
-  octant entered with probability 1/4, a node visit costing 12 tests; cells at least 8 paddings wide):
+  octant entered with probability 1/4, a node visit costing 12 tests; cells at least 2 paddings wide):
   on the SPD scenes the tree is the same or nearly (SIMD time 0.98 of the strict D = 10 tree's, within
-  noise), while a crowded leaf at depth 10 splits on (teapot in a stadium, `gen:stadium:4`: 8.7x faster
-  on primary rays, 9.2x on diffuse). `--octree-depth D` restores a hard limit; `--octree-build sah`
+  noise), while a crowded leaf at depth 10 splits on (teapot in a stadium, `gen:stadium:4`, SIMD, one
+  thread: primary rays 396 -> 24 ms, diffuse 185 -> 18 ms). `--octree-depth D` restores a hard limit; `--octree-build sah`
   applies the heuristic at every level instead of K (1.04 of the default's time on the SPD scenes).
 - **BVH** (`host/accel/bvh_builder.cpp`, `kernels/bvh.h`): binned SAH (32 bins, all three axes),
   leaves of at most **4** primitives (`--bvh-leaf`), oneTBB-parallel, 32-byte nodes. The builder
