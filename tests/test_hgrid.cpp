@@ -64,6 +64,29 @@ int CheckLayout(const HGridData& h)
   return levels;
 }
 
+// Checks the hierarchical grid's answers to `rays` against the reference
+// and against the uniform grid's, bit for bit (occlusion: hit or miss), on
+// scalar and SIMD, closest and any hit; returns the hits counted over all.
+std::size_t CheckAgainstGrid(const Scene& scene, const std::vector<RayRecord>& rays)
+{
+  std::size_t hits = 0;
+  for (Backend backend : {Backend::Scalar, Backend::Simd})
+    for (bool occlusion : {false, true}) {
+      CAPTURE(BackendName(backend));
+      CAPTURE(occlusion);
+      TraceConfig cfg;
+      cfg.backend = backend;
+      cfg.accel = AccelKind::HGrid;
+      std::vector<HitRecord> a, b;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &a).wrong == 0);
+      cfg.accel = AccelKind::Grid;
+      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &b).wrong == 0);
+      CHECK(test::CountDiffering(a, b, occlusion) == 0);
+      for (const HitRecord& h : a) hits += h.prim != CR_NO_HIT;
+    }
+  return hits;
+}
+
 }  // namespace
 
 TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0 wrong on scalar and simd")
@@ -89,21 +112,7 @@ TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0
   const double grid = perRay(AccelKind::Grid), hgrid = perRay(AccelKind::HGrid);
   MESSAGE("tests per ray: grid ", grid, ", hgrid ", hgrid, " (", levels, " levels)");
   CHECK(hgrid * 5.0 < grid);
-  for (Backend backend : {Backend::Scalar, Backend::Simd})
-    for (bool occlusion : {false, true}) {
-      CAPTURE(BackendName(backend));
-      CAPTURE(occlusion);
-      TraceConfig cfg;
-      cfg.backend = backend;
-      cfg.accel = AccelKind::HGrid;
-      std::vector<HitRecord> a, b;
-      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &a).wrong == 0);
-      cfg.accel = AccelKind::Grid;
-      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &b).wrong == 0);
-      // The same answers as the uniform grid, bit for bit (occlusion: hit or
-      // miss).
-      CHECK(test::CountDiffering(a, b, occlusion) == 0);
-    }
+  CheckAgainstGrid(scene, rays);
 }
 
 TEST_CASE("hgrid: rays from across the stadium test a crowded cell's own references, 0 wrong")
@@ -122,23 +131,7 @@ TEST_CASE("hgrid: rays from across the stadium test a crowded cell's own referen
     rays.push_back(RayRecord{{float(from.x), float(from.y), float(from.z)}, 0.0f,
                              {float(d.x), float(d.y), float(d.z)}, INFINITY});
   }
-  std::size_t hits = 0;
-  for (Backend backend : {Backend::Scalar, Backend::Simd})
-    for (bool occlusion : {false, true}) {
-      CAPTURE(BackendName(backend));
-      CAPTURE(occlusion);
-      TraceConfig cfg;
-      cfg.backend = backend;
-      cfg.accel = AccelKind::HGrid;
-      std::vector<HitRecord> a, b;
-      const ref::CheckResult r = test::CheckTracer(scene, cfg, rays, occlusion, &a);
-      CHECK(r.wrong == 0);
-      cfg.accel = AccelKind::Grid;
-      CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &b).wrong == 0);
-      CHECK(test::CountDiffering(a, b, occlusion) == 0);
-      for (const HitRecord& h : a) hits += h.prim != CR_NO_HIT;
-    }
-  CHECK(hits > rays.size());
+  CHECK(CheckAgainstGrid(scene, rays) > rays.size());
 }
 
 TEST_CASE("hgrid: SPD scenes build a valid layout, and bad densities are input errors")
