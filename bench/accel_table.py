@@ -100,14 +100,15 @@ def main():
   surfaces to lights, take 31% more steps). An option, not the default.
 - **Hierarchical grid** (`host/accel/hgrid_builder.cpp`, `kernels/hgrid.h`): a root uniform grid at
   **0.25** cells per primitive (`--hgrid-top-density`); every cell with more than **8** references
-  (`--hgrid-leaf`) gets a uniform grid of its own over the cell, about **2** cells per reference
+  (`--hgrid-leaf`) gets a uniform grid of its own over the cell, about **1** cell per reference
   (`--hgrid-density`), and so on down to 4 levels below the root. A child is kept only where the surface
   area estimate of a grid (each child cell entered with the ratio of the areas, a step and a test per
   reference) is below the cell's own tests and it copies the references at most 8 times. Defaults from
   `bench/hgrid_param_sweep.py` (root 0.25..4, child 1..4, SIMD, one thread, primary and diffuse rays of
   balls, gears, teapot, tree, before the surface area rule was added: 0.25 and 2 at 1.13 of each row's
   best in geometric mean, the uniform grid
-  0.82, the BVH 0.21). Every level is walked by the uniform grid's 3D-DDA; a child's walk starts at the
+  0.82, the BVH 0.21; with the children's own margins, child density 1 against 2: 1.03 against 1.07 of
+  the better on the 11 SPD scenes, 1.01 against 1.07 on bunny, sponza and dragon100k). Every level is walked by the uniform grid's 3D-DDA; a child's walk starts at the
   parameter where its parent's walk entered the cell. Margins belong to the ray: the root takes its
   references with the uniform grid's epsilon (2^-18 of the scene's scale), each child with 1/32 of its
   cell side; a cell that holds a child also keeps its own references, and a ray walks the child only
