@@ -115,7 +115,7 @@ def main():
   where its float walk's possible error at the cell's exit (8 ulps of the distance travelled,
   `HGrid_Reach`) is within the child's margin, else it tests the cell's references. Children may so be
   finer than the scene's epsilon (cells down to 2^-14 of their own coordinates): on the teapot in a
-  stadium (`gen:stadium:4`, primary rays) the tests per ray fell from 155 to 7.7.
+  stadium (`gen:stadium:4`, primary rays) the tests per ray fell from 155 to 7.7 (8.4 at the default child density 1).
 
 Per-ray measures: N_IT intersection tests, N_TS traversal steps (cells or nodes visited), N_ETS leaves
 visited, N_EETS empty leaves visited; averaged over 512² primary rays and 262,144 shadow rays
