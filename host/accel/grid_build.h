@@ -35,7 +35,8 @@ namespace gridbuild {
 // time / best 1.13-1.21 against 1.23-1.37 for 4 and 1.22-1.30 for 8. Scenes
 // with a small object on a large ground (tree, balls) want more cells, the
 // compact ones 2 to 8: what the cost model tells apart. The hierarchical
-// grid's root and its tests use fixed densities.
+// grid's root and its tests use fixed densities; the cost model falls back
+// to this one where no candidate fits its memory.
 constexpr double kDefaultDensity = 16.0;
 constexpr double kMaxDensity = 1024.0;
 constexpr int kMaxResAxis = 4096;

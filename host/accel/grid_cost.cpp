@@ -166,6 +166,13 @@ Res ChooseResolutionByCost(const Scene& scene, const Frame& f, const std::vector
       break;  // past the minimum
     }
   }
+  if (!std::isfinite(bestCost)) {
+    // Not one candidate fits the model's memory (over 10^8 primitives): the
+    // fixed density of old.
+    density = kDefaultDensity;
+    best = ChooseResolution(f.ext, density * double(n));
+    CapResolution(best, f.lo, f.hi, f.scale);
+  }
   return best;
 }
 
