@@ -19,16 +19,10 @@ import glob
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
-
-def run_json(cmd):
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"hgrid_param_sweep: {' '.join(cmd)} failed ({p.returncode}): {p.stderr.strip()}")
-    return json.loads(p.stdout.strip().splitlines()[-1])
+from benchlib import run, run_text
 
 
 def main():
@@ -56,20 +50,20 @@ def main():
             rays = os.path.join(work, f"{name}.{kind}.rays")
             gen = [a.bin, "rays", scene, "--kind", kind, "-o", rays]
             gen += ["--size", f"{a.size}x{a.size}"] if kind == "primary" else ["--count", str(a.size * a.size)]
-            subprocess.run(gen, check=True, capture_output=True)
+            run_text(gen)
             occl = ["--occlusion"] if kind == "shadow" else []
             base = [a.bin, "trace", scene, "--rays", rays, "--backend", a.backend, "--threads", str(a.threads)] + occl
 
             def timed(extra):
-                return run_json(base + extra + ["--repeat", str(a.repeat)])["trace_ms_min"]
+                return run(base + extra + ["--repeat", str(a.repeat)])["trace_ms_min"]
 
             row = {"scene": name, "kind": kind, "grid": timed(["--accel", "grid"]), "bvh": timed(["--accel", "bvh"])}
             for t, s in pairs:
                 extra = ["--accel", "hgrid", "--hgrid-top-density", str(t), "--hgrid-density", str(s)]
                 row[f"{t:g}/{s:g}"] = timed(extra)
                 hits = os.path.join(work, "h.hits")
-                subprocess.run(base + extra + ["-o", hits], check=True, capture_output=True)
-                chk = run_json([a.bin, "check", scene, "--rays", rays, "--hits", hits] + occl)
+                run_text(base + extra + ["-o", hits])
+                chk = run([a.bin, "check", scene, "--rays", rays, "--hits", hits] + occl)
                 if chk["wrong"]:
                     sys.exit(f"hgrid_param_sweep: {name} {kind} {t:g}/{s:g}: {chk['wrong']} wrong answers")
             rows.append(row)

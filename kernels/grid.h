@@ -29,8 +29,9 @@
 #else
 #define CR_WITH_GRID 0
 #endif
-/* The walk's pieces (Grid_Plane .. Grid_Walk) also serve every level of the
- * hierarchical grid (kernels/hgrid.h). */
+/* The walk's pieces (Grid_Plane .. Grid_Step) also serve every level of the
+ * hierarchical grid (kernels/hgrid.h); Grid_Next and Grid_Walk are the
+ * uniform grid's own. */
 #if CR_WITH_GRID || defined(CR_ACCEL_HGRID)
 
 /* Plane i (0..res[axis]) of the grid along `axis`. Computed in float in every
@@ -140,6 +141,9 @@ CR_FUNC int Grid_Step(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hit
   return 1;
 }
 
+#endif /* the walk */
+#if CR_WITH_GRID
+
 /* Grid_Step without the exit parameter: the walk of the uniform grid. */
 CR_FUNC int Grid_Next(CR_GLOBAL const GridHeader* grid, const Ray* ray, real hitT, int cell[3])
 {
@@ -167,9 +171,6 @@ CR_FUNC int Grid_Walk(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const uint* ce
   } while (Grid_Next(grid, ray, hit->t, cell));
   return 0;
 }
-
-#endif /* the walk */
-#if CR_WITH_GRID
 
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * grid; `hit` must come from Hit_Init. */

@@ -252,6 +252,7 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
   for (std::size_t i = 0; i < all.size(); ++i) {
     const GridBuild& g = *all[i];
     offsetAt[i] = nOffsets;
+    itemAt[i] = nItems;  // after the offsets: shifted below
     nOffsets += g.start.size();
     nCells += g.h.nCells;
     for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
@@ -266,14 +267,7 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
       nItems += k;
     }
   }
-  {
-    std::uint64_t at = nOffsets;
-    for (std::size_t i = 0; i < all.size(); ++i) {
-      itemAt[i] = at;
-      const GridBuild& g = *all[i];
-      at += g.start[g.h.nCells] + (g.childAt.empty() ? 0 : g.children.size());
-    }
-  }
+  for (std::uint64_t& at : itemAt) at += nOffsets;
   if (nOffsets + nItems >= std::uint64_t(CR_HGRID_CHILD))
     throw RuntimeError(fmt::format("hgrid: {} references and cell offsets do not fit 31-bit indices", nOffsets + nItems));
   HGridData out;
