@@ -32,6 +32,7 @@ typedef struct {
 #include "triangle.h"
 #include "cone.h"
 #include "box.h"
+#include "quadric.h"
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
  * robust mode: an exact float tie between two different spheres goes to the

@@ -78,6 +78,19 @@ typedef struct {
   uint pad1;
 } Box;
 
+/* Quadric surface clipped to a box (NFF extension `quadric`): 64 bytes. The
+ * surface is f(x) = x^T Q x + 2 l . x + j = 0 in coordinates x = p - centre
+ * relative to the clip box's centre, for |x[i]| <= extent[i] (the half-extents); q holds Q's
+ * entries xx, yy, zz, xy, xz, yz (POV-Ray's D, E, F halved), l the halved
+ * linear coefficients. */
+typedef struct {
+  float center[3];
+  float j;
+  float extent[3];
+  float q[6];
+  float l[3];
+} Quadric;
+
 /* The primitive types, one entry each, in unified-index order:
  * X(Type, UPPER, array): the layout `Type` (below), its index constant
  * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
@@ -86,12 +99,14 @@ typedef struct {
  * the lower g). The device code and its dispatch are generated from this
  * list (kernels/intersect.h, packet.cl). */
 #define CR_PRIM_TYPES(X) \
-  X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes)
+  X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes) \
+      X(Quadric, QUADRIC, quadrics)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
 #define CR_PRIM_BOX 3u
-#define CR_NUM_PRIM_TYPES 4u
+#define CR_PRIM_QUADRIC 4u
+#define CR_NUM_PRIM_TYPES 5u
 /* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
@@ -217,6 +232,7 @@ static_assert(sizeof(Sphere) == 16);
 static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
 static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
 static_assert(sizeof(Box) == 32 && offsetof(Box, hi) == 16);
+static_assert(sizeof(Quadric) == 64 && offsetof(Quadric, extent) == 16 && offsetof(Quadric, q) == 28);
 static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);

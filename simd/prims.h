@@ -24,3 +24,4 @@ struct SimdTest;
 #include "simd/triangle.h"
 #include "simd/cone.h"
 #include "simd/box.h"
+#include "simd/quadric.h"

@@ -1,0 +1,208 @@
+/* The quadric surface clipped to a box (NFF extension `quadric A B C D E F G
+ * H I J xmin ymin zmin xmax ymax zmax`, docs/FORMATS.md): ellipsoids,
+ * paraboloids, hyperboloids, cylinders, cones, pairs of planes. The layout is
+ * Quadric of kernels/types.h: the surface
+ *     f(x) = x^T Q x + 2 l . x + j = 0,   x = p - centre,
+ * in coordinates relative to the clip box's centre (the host re-expresses
+ * the statement's coefficients there, in double, before rounding them), and
+ * the clip box |x[i]| <= extent[i]. Centring keeps the numbers of a small
+ * quadric far from the world origin at its own scale.
+ *
+ * Along the ray x = x0 + t d (x0 = o - centre): a t^2 + 2 bh t + c = 0 with
+ *     a = d . Q d,   bh = d . (Q x0 + l),   c = x0 . (Q x0 + 2 l) + j;
+ * roots q / a and c / q with q = -(bh + sign(bh) sqrt(bh^2 - a c)) (no
+ * cancellation between -bh and the root; a = 0, a ray along a paraboloid's
+ * axis or a cylinder's, leaves the one root c / q). The hit is the first
+ * root in [tmin, tmax] whose point lies in the clip box: a ray that enters
+ * an open cylinder through its rim sees the inside wall, the second root.
+ *
+ * Robust mode: each of a, bh, c is computed with its scale (the same sum of
+ * absolute values: aS, bS, cS), float's error bounds follow from them, and
+ * where a root that may lie in [tmin, tmax] may be off by more than 2^-19 of
+ * the checker's tolerance scale |o|/|d| + |t| (an eighth of its 2^-16,
+ * docs/TOLERANCE.md), or where the discriminant is within its own error of
+ * 0 (hit or miss undecided), the whole test runs again in double-float from
+ * the exact o - centre (Quadric_IntersectDf). That covers the quadric's
+ * versions of the sphere's cases: a ground ellipsoid 1e6 across seen from
+ * 10 above (c cancels), a tiny quadric far away (the discriminant cancels),
+ * a ray leaving the surface (c near 0, its root near 0).
+ *
+ * Error bounds, first order, generously (u = 2^-24; x0 = o - centre is
+ * rounded once, relative u): Q x0 + l per component within 5u of its
+ * scale, so bh within 8u bS and c within 11u cS; a within 6u aS. We take
+ * 2^-20 (16u) for a and bh and 2^-19 (32u) for c; the discriminant
+ * bh^2 - a c within 2|bh| eb + |a| ec + |c| ea + 3u (bh^2 + |a c|); its root
+ * within that over sqrt(disc) (disc above its error here); q within eb +
+ * e_sq + u|q|; the roots within |t| (eq/|q| + ea/|a| + u) (q / a) and
+ * ec/|q| + |t| (eq/|q| + u) (c / q). */
+#ifndef CELLRAY_KERNELS_QUADRIC_H
+#define CELLRAY_KERNELS_QUADRIC_H
+#include "numeric.h"
+
+#ifndef CR_HAS_QUADRIC
+#define CR_HAS_QUADRIC 1
+#endif
+
+/* Q v for the symmetric Q of s (entries xx, yy, zz, xy, xz, yz). */
+CR_FUNC void Quadric_MulQ(const Quadric* s, const real v[3], real out[3])
+{
+  out[0] = (real)s->q[0] * v[0] + (real)s->q[3] * v[1] + (real)s->q[4] * v[2];
+  out[1] = (real)s->q[3] * v[0] + (real)s->q[1] * v[1] + (real)s->q[5] * v[2];
+  out[2] = (real)s->q[4] * v[0] + (real)s->q[5] * v[1] + (real)s->q[2] * v[2];
+}
+
+/* Is x0 + t d in the clip box? */
+CR_FUNC int Quadric_InBox(const Quadric* s, const real x0[3], const real d[3], real t)
+{
+  int in = 1;
+  CR_UNROLL for (int i = 0; i < 3; ++i) in = in && fabs(x0[i] + t * d[i]) <= (real)s->extent[i];
+  return in;
+}
+
+/* The first of the roots t0 <= t1 in [tmin, tmax] whose point is in the box. */
+CR_FUNC int Quadric_Pick(const Quadric* s, const real x0[3], const real d[3], real t0, real t1, real tmin,
+                         real tmax, real* tHit)
+{
+  if (t0 >= tmin && t0 <= tmax && Quadric_InBox(s, x0, d, t0)) {
+    *tHit = t0;
+    return 1;
+  }
+  if (t1 >= tmin && t1 <= tmax && Quadric_InBox(s, x0, d, t1)) {
+    *tHit = t1;
+    return 1;
+  }
+  return 0;
+}
+
+#if !defined(CR_FAST) && !defined(CR_FP64)
+/* The test in double-float from the exact x0 = o - centre (TwoSum) and
+ * exact products of the float data: the cold path of robust mode. */
+CR_COLD CR_FUNC int Quadric_IntersectDf(const real org[3], const real dir[3], const Quadric* s, real tmin, real tmax,
+                                        real* tHit)
+{
+  Df x[3];
+  real xf[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    x[i] = Df_SumF(org[i], -s->center[i]);
+    xf[i] = x[i].hi;
+  }
+  /* Q's rows as indices into q: xx yy zz xy xz yz. */
+  const int row[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
+  Df a = Df_F(0.0f), bh = Df_F(0.0f), c = Df_F(s->j);
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    Df qd = Df_F(0.0f), u = Df_F(s->l[i]);
+    CR_UNROLL for (int k = 0; k < 3; ++k) {
+      const float qik = s->q[row[i][k]];
+      qd = Df_Add(qd, Df_ProdF(qik, dir[k]));
+      u = Df_Add(u, Df_MulF(x[k], qik));
+    }
+    a = Df_Add(a, Df_MulF(qd, dir[i]));
+    bh = Df_Add(bh, Df_MulF(u, dir[i]));
+    c = Df_Add(c, Df_Mul(x[i], Df_Add(u, Df_F(s->l[i]))));
+  }
+  const Df disc = Df_Sub(Df_Mul(bh, bh), Df_Mul(a, c));
+  if (disc.hi < 0.0f) return 0;
+  real t0, t1;
+  if (a.hi == 0.0f && bh.hi == 0.0f) return 0; /* no root, or every t (a line on the surface) */
+  Df_QuadraticRoots(a, bh, c, disc, &t0, &t1);
+  return Quadric_Pick(s, xf, dir, t0, t1, tmin, tmax, tHit);
+}
+
+/* Whether root t, within e of its true value, may lie in [tmin, tmax] while
+ * e exceeds 2^-19 (|o|/|d| + |t|), the margin robust mode keeps from the
+ * checker's tolerance. NaN (a = 0: the root q / a at infinity with a
+ * possibly nonzero) counts as "may". */
+CR_FUNC int Quadric_RootNeedsDf(real t, real e, real oScale, real tmin, real tmax)
+{
+  if (e <= 0x1.0p-19f * (oScale + fabs(t))) return 0;
+  return !(t + e < tmin || t - e > tmax);
+}
+#endif
+
+/* Nearest root in [tmin, tmax] inside the clip box. */
+CR_FUNC int Quadric_Intersect(const Ray* r, const Quadric* s, real tmin, real tmax, real* tHit)
+{
+  real x0[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) x0[i] = r->org[i] - (real)s->center[i];
+  real qd[3], u[3];
+  Quadric_MulQ(s, r->dir, qd);
+  Quadric_MulQ(s, x0, u);
+  CR_UNROLL for (int i = 0; i < 3; ++i) u[i] = u[i] + (real)s->l[i];
+  const real a = Dot3(r->dir, qd);
+  const real bh = Dot3(r->dir, u);
+  const real c = x0[0] * (u[0] + (real)s->l[0]) + x0[1] * (u[1] + (real)s->l[1]) + x0[2] * (u[2] + (real)s->l[2]) +
+                 (real)s->j;
+  const real disc = bh * bh - a * c;
+#if !defined(CR_FAST) && !defined(CR_FP64)
+  {
+    /* The scales: the same sums over absolute values. */
+    real ad[3], ax[3], aq[6], us[3];
+    CR_UNROLL for (int i = 0; i < 3; ++i) {
+      ad[i] = fabs(r->dir[i]);
+      ax[i] = fabs(x0[i]);
+    }
+    Quadric aQ = *s;
+    CR_UNROLL for (int i = 0; i < 6; ++i) aq[i] = fabs(s->q[i]);
+    CR_UNROLL for (int i = 0; i < 6; ++i) aQ.q[i] = aq[i];
+    real qs[3];
+    Quadric_MulQ(&aQ, ad, qs);
+    Quadric_MulQ(&aQ, ax, us);
+    CR_UNROLL for (int i = 0; i < 3; ++i) us[i] = us[i] + fabs(s->l[i]);
+    const real aS = Dot3(ad, qs);
+    const real bS = Dot3(ad, us);
+    const real cS = ax[0] * (us[0] + fabs(s->l[0])) + ax[1] * (us[1] + fabs(s->l[1])) +
+                    ax[2] * (us[2] + fabs(s->l[2])) + fabs(s->j);
+    const real ea = 0x1.0p-20f * aS, eb = 0x1.0p-20f * bS, ec = 0x1.0p-19f * cS;
+    const real ed = 2.0f * fabs(bh) * eb + fabs(a) * ec + fabs(c) * ea + 0x1.0p-22f * (bh * bh + fabs(a * c));
+    if (disc < -ed) return 0; /* a miss for certain */
+    /* Undecided, or a degenerate form (a = bh = 0): double-float. NaN and
+     * overflow fall through to it as well. */
+    if (!(disc > ed) || (a == 0.0f && bh == 0.0f))
+      return Quadric_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
+    const real sq = copysign(sqrt(disc), bh);
+    const real q = -(bh + sq);
+    const real t0 = q / a, t1 = c / q;
+    const real eq = eb + ed / fabs(sq) + 0x1.0p-24f * fabs(q);
+    const real rq = eq / fabs(q) + 0x1.0p-24f;
+    /* a = 0 with no error (aS = 0: a ray along a cylinder's axis) puts the
+     * root q / a exactly at infinity. */
+    const real e0 = ea == 0.0f ? fabs(t0) * rq : fabs(t0) * (rq + ea / fabs(a));
+    const real e1 = ec / fabs(q) + fabs(t1) * rq;
+    const real oScale = fmax(fabs(r->org[0]), fmax(fabs(r->org[1]), fabs(r->org[2]))) /
+                        fmax(ad[0], fmax(ad[1], ad[2]));
+    if (Quadric_RootNeedsDf(t0, e0, oScale, tmin, tmax) || Quadric_RootNeedsDf(t1, e1, oScale, tmin, tmax))
+      return Quadric_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
+    return Quadric_Pick(s, x0, r->dir, fmin(t0, t1), fmax(t0, t1), tmin, tmax, tHit);
+  }
+#else
+  if (disc < (real)0.0f) return 0;
+  const real sq = copysign(sqrt(disc), bh);
+  const real q = -(bh + sq);
+  if (q == (real)0.0f) return 0; /* a = bh = 0, or a tangent through the origin's level */
+  const real t0 = q / a, t1 = c / q;
+  return Quadric_Pick(s, x0, r->dir, fmin(t0, t1), fmax(t0, t1), tmin, tmax, tHit);
+#endif
+}
+
+/* The uniform form of the dispatch (CR_PRIM_TYPES): no barycentrics. */
+CR_FUNC int Quadric_Test(const Ray* r, const Quadric* s, real tmin, real tmax, real* tHit, real* u, real* v)
+{
+  (void)u;
+  (void)v;
+  return Quadric_Intersect(r, s, tmin, tmax, tHit);
+}
+/* A copy of a quadric in global memory (field by field). */
+CR_FUNC Quadric Quadric_Load(CR_GLOBAL const Quadric* p)
+{
+  Quadric s;
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    s.center[i] = p->center[i];
+    s.extent[i] = p->extent[i];
+    s.l[i] = p->l[i];
+  }
+  CR_UNROLL for (int i = 0; i < 6; ++i) s.q[i] = p->q[i];
+  s.j = p->j;
+  return s;
+}
+
+#endif /* CELLRAY_KERNELS_QUADRIC_H */
