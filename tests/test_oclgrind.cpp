@@ -3,8 +3,8 @@
 // values, data races (local and global) and API misuse: structure (grid,
 // octree, BVH) x variant (ray, packet) x query (closest, occlusion) x
 // precision (fast, robust, fp64) x primitive-type set (every non-empty subset
-// of spheres, triangles, cones: the backend compiles only the types a scene
-// has), 252 configurations, the 12 robust ones with every type again with
+// of spheres, triangles, cones, and boxes with quadrics: the backend compiles
+// only the types a scene has), 288 configurations, the 12 robust ones with every type again with
 // their cold paths inlined (CELLRAY_CL_COLD=inline), plus the camera kernels with counters,
 // the generic programs and the renderer's unified hits. Each runs the real
 // binary as `oclgrind --data-races --uninitialized --check-api cellray trace
@@ -22,7 +22,7 @@
 // The oracle is PoCL's generic per-ray program of the same precision
 // (--variant ray-generic: every type and structure, chosen by arguments),
 // the same traversal code as every specialised program; it is compiled once
-// per precision (about 9 s cold on the CI machine) where 252 specialised
+// per precision (about 9 s cold on the CI machine) where 288 specialised
 // PoCL programs would take minutes. Skipped, loudly, without oclgrind or
 // without an OpenCL device. Cost: docs/OPENCL.md, "Checked under Oclgrind".
 // A last test registers Oclgrind's ICD beside the installed ones and checks
@@ -120,11 +120,13 @@ fs::path Dir()
 
 struct TypeSet {
   const char* name;
-  bool spheres, triangles, cones;
+  bool spheres, triangles, cones, boxes = false, quadrics = false;
 };
+// The subsets of the SPD's types, then the NFF extensions' types together
+// (box and quadric: one set, each program holding both).
 constexpr TypeSet kTypeSets[] = {{"s", true, false, false},  {"t", false, true, false}, {"c", false, false, true},
                                  {"st", true, true, false},  {"sc", true, false, true}, {"tc", false, true, true},
-                                 {"stc", true, true, true}};
+                                 {"stc", true, true, true},  {"bq", false, false, false, true, true}};
 
 // A 3 x 3 x 2 block of primitives, the set's types in turn: 18 primitives,
 // enough for interior BVH nodes (leaves of 4), a subdivided octree (leaves
@@ -135,6 +137,8 @@ std::string SceneText(const TypeSet& ts)
   if (ts.spheres) types.push_back('s');
   if (ts.triangles) types.push_back('t');
   if (ts.cones) types.push_back('c');
+  if (ts.boxes) types.push_back('b');
+  if (ts.quadrics) types.push_back('q');
   std::string s =
       "b 0.1 0.1 0.1\nv\nfrom 0.3 -6 1.2\nat 0 0 0.55\nup 0 0 1\nangle 30\nhither 0.01\nresolution 4 4\n"
       "l 3 -6 6\nf 0.8 0.5 0.3 0.6 0.2 20 0.3 1.3\n";
@@ -150,6 +154,12 @@ std::string SceneText(const TypeSet& ts)
                              y - 0.1, h + 0.5);
             break;
           case 'c': s += fmt::format("c {} {} {} 0.4 {} {} {} 0.1\n", x, y, h - 0.4, x, y + 0.1, h + 0.4); break;
+          case 'b': s += fmt::format("box {} {} {} {} {} {}\n", x - 0.4, y - 0.3, h - 0.4, x + 0.4, y + 0.3, h); break;
+          case 'q':  // an ellipsoid with a tilt (xz term), clipped at its top
+            s += fmt::format("quadric 4 9 6 0 2 0 {} {} {} {} {} {} {} {} {} {}\n", -8 * x - 2 * h, -18 * y,
+                             -12 * h - 2 * x, 4 * x * x + 9 * y * y + 6 * h * h + 2 * x * h - 1, x - 0.6, y - 0.4,
+                             h - 0.5, x + 0.6, y + 0.4, h + 0.3);
+            break;
         }
       }
   return s;

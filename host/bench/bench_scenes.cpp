@@ -36,8 +36,8 @@ std::optional<SceneRef> GeneratedRef(const std::string& name)
   auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
   if (ec != std::errc() || p != num.data() + num.size())
     throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium")
-    throw InputError(fmt::format("scene '{}': generated kinds are sphereflake, bumpy and stadium", name));
+  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics")
+    throw InputError(fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium and quadrics", name));
   return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
 }
 
@@ -138,6 +138,7 @@ Scene LoadBenchScene(const SceneRef& ref)
   const std::uint64_t n = std::stoull(ref.path.substr(colon + 1));
   if (kind == "sphereflake") return GenerateSphereflake(static_cast<int>(std::min<std::uint64_t>(n, 100)));
   if (kind == "bumpy") return GenerateBumpySphere(n);
+  if (kind == "quadrics") return GenerateQuadricField(n);
   return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
 }
 

@@ -7,6 +7,7 @@
 
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/scene/nff.h"
 
 namespace cr {
 
@@ -189,6 +190,67 @@ void WriteNFF(const Scene& s, const std::string& path)
     }
     if (std::fclose(f) != 0) throw RuntimeError(fmt::format("{}: write failed", path));
   });
+}
+
+Scene GenerateQuadricField(std::uint64_t n)
+{
+  if (n < 1 || n > (std::uint64_t(1) << 24))
+    throw InputError(fmt::format("quadric field of {} quadrics: expected 1 .. 2^24", n));
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+  const double half = side;  // cells 2 units across
+  Scene s = Base({float(-0.9 * half), float(-1.1 * half), float(0.25 * half + 3.0)}, {0.0f, 0.0f, 0.0f}, 45.0f);
+  s.lights = {Light{{float(-2 * half), float(-half), float(3 * half)}, glm::vec3(1)},
+              Light{{float(half), float(-2 * half), float(half)}, glm::vec3(0.6f)}};
+  s.materials.push_back(Material{{0.6f, 0.6f, 0.55f}, 0.8f, 0.0f, 10.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{0.8f, 0.4f, 0.3f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{0.3f, 0.6f, 0.8f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
+  AddQuad(s, {half, half, 0.0}, {-half, half, 0.0}, {-half, -half, 0.0}, {half, -half, 0.0}, 1);
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  auto uni = [&](double lo, double hi) {  // splitmix64
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
+  };
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const glm::dvec3 c(-half + 2.0 * i + 1.0, -half + 2.0 * j + 1.0, uni(0.7, 0.9));
+      // the family in its own frame: diag(m) x^2 + b . x + k = 0 (z its axis)
+      const int fam = int(uni(0.0, 6.0));
+      const double r = uni(0.3, 0.6), h = uni(0.5, 0.8);
+      glm::dvec3 m(1.0), b(0.0), ext(0.85);
+      double k = -r * r;
+      switch (fam) {
+        case 0: m = {1.0, uni(0.8, 2.0), uni(1.0, 3.0)}; break;         // ellipsoid
+        case 1: m = {1.0, 1.0, -0.25}; k = -r * r * 0.25; break;         // hyperboloid, one sheet
+        case 2: m = {-1.0, -1.0, 1.0}; k = -0.05; break;                 // two sheets
+        case 3: m = {1.0, 1.0, 0.0}; b = {0, 0, -2.0 * h}; k = 0.0; break;  // paraboloid
+        case 4: m = {1.0, 1.0, 0.0}; break;                                  // cylinder
+        default: m = {1.0, 1.0, -0.2}; k = 0.0; break;                       // cone
+      }
+      ext.z = fam == 3 ? 0.5 * h : 0.7;
+      // random rotation about x then z
+      const double ax = uni(-0.5, 0.5), az = uni(0.0, 2.0 * kPi);
+      const glm::dmat3 rx(1, 0, 0, 0, std::cos(ax), std::sin(ax), 0, -std::sin(ax), std::cos(ax));
+      const glm::dmat3 rz(std::cos(az), std::sin(az), 0, -std::sin(az), std::cos(az), 0, 0, 0, 1);
+      const glm::dmat3 R = rz * rx;
+      const glm::dmat3 Q = R * glm::dmat3(m.x, 0, 0, 0, m.y, 0, 0, 0, m.z) * glm::transpose(R);
+      const glm::dvec3 rb = R * b, qc = Q * c;
+      const glm::dvec3 L = rb - 2.0 * qc;
+      const double J = glm::dot(c, qc) - glm::dot(rb, c) + k;
+      // the clip box: the rotated frame box's axis-aligned bounds, within the cell
+      glm::dvec3 e(0.0);
+      for (int a = 0; a < 3; ++a)
+        for (int q = 0; q < 3; ++q) e[a] += std::fabs(R[q][a]) * ext[q];
+      e = glm::min(e, glm::dvec3(0.95, 0.95, c.z));
+      NffValues st("quadric", s.path, long(s.NumPrims()),
+                   {Q[0][0], Q[1][1], Q[2][2], 2 * Q[1][0], 2 * Q[2][0], 2 * Q[2][1], L.x, L.y, L.z, J, c.x - e.x,
+                    c.y - e.y, c.z - e.z, c.x + e.x, c.y + e.y, c.z + e.z},
+                   2 + std::uint32_t(fam % 2));
+      ReadGeometry(st, s);
+    }
+  return s;
 }
 
 }  // namespace cr

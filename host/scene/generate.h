@@ -24,6 +24,12 @@ Scene GenerateBumpySphere(std::uint64_t triangles);
 // (a ground plane, a ring of large pillars), the camera close to the object.
 Scene GenerateStadium(int depth);
 
+// A field of about n clipped quadrics (NFF extension `quadric`): ellipsoids,
+// hyperboloids of one and two sheets, paraboloids, cylinders and cones,
+// randomly tilted, one per cell of a square grid on a ground quad, the camera
+// above one corner looking across (seeded: the same n gives the same scene).
+Scene GenerateQuadricField(std::uint64_t n);
+
 // Writes a generated scene (spheres and triangles) as NFF.
 void WriteNFF(const Scene& scene, const std::string& path);
 

@@ -5,6 +5,8 @@
 // hard_cases.h.
 #pragma once
 
+#include <array>
+
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -70,6 +72,8 @@ class SceneBuilder {
   std::uint32_t Box(const glm::dvec3& lo, const glm::dvec3& hi);
   // An axis-aligned box primitive (NFF extension `box`).
   std::uint32_t AxisBox(const glm::dvec3& lo, const glm::dvec3& hi);
+  // `quadric` statement: coefficients A..J (POV-Ray's order), clip box.
+  std::uint32_t Quadric(const std::array<double, 10>& k, const glm::dvec3& lo, const glm::dvec3& hi);
   std::uint32_t NextId() const { return scene_->NumPrims(); }
   Scene& Get() { return *scene_; }
   std::shared_ptr<const Scene> Finish() { return std::move(scene_); }

@@ -61,6 +61,10 @@ std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec,
       const double m = edgeFrac * (hi[a] - lo[a]);
       if (p[a] < lo[a] + m || p[a] > hi[a] - m) return kAnyPrim;
     }
+  } else if (Prim_Is(&n, CR_PRIM_QUADRIC, h.g)) {
+    const Quadric& q = scene.quadrics[Prim_Local(&n, CR_PRIM_QUADRIC, h.g)];
+    for (int a = 0; a < 3; ++a)  // inside the clip box, away from the rim
+      if (std::fabs(p[a] - double(q.center[a])) > (1.0 - edgeFrac) * double(q.extent[a])) return kAnyPrim;
   }
   return scene.IdOfUnified(h.g);
 }
@@ -296,6 +300,41 @@ HardCase GroundBox(const GenOptions& o)
   return c;
 }
 
+// The ground of GroundSphere as a quadric: the ellipsoid x^2 + 4 (y + 5e5)^2
+// + z^2 = 1e12 (semi-axes 1e6, 5e5, 1e6, its top at y = 0) clipped to
+// y >= -10, with a paraboloid bowl y = (x^2 + z^2) / 4 and a tilted
+// hyperboloid of one sheet on it; cameras 10..100 above, rays down at every
+// angle up to 85 degrees from the vertical and at the two small quadrics.
+// The ground's c = f(o - centre) cancels 13 bits in float, as the ground
+// sphere's |f|^2 - r^2 does.
+HardCase GroundQuadric(const GenOptions& o)
+{
+  Rng rng(511);
+  SceneBuilder b;
+  b.Quadric({1, 4, 1, 0, 0, 0, 0, 4e6, 0, 0}, {-1e6, -10.0, -1e6}, {1e6, 1.0, 1e6});
+  b.Quadric({0.25, 0, 0.25, 0, 0, 0, 0, -1, 0, 0}, {-3.0, 0.0, -3.0}, {3.0, 2.25, 3.0});
+  // (x - 8)^2 + (z - 2)^2 - (y - 2)^2 / 4 + 0.3 x y = 1, clipped to a box around it
+  b.Quadric({1, -0.25, 1, 0.3, 0, 0, -16, 1, -4, 8 * 8 + 4 - 1 - 1}, {5.0, 0.0, -1.0}, {11.0, 4.0, 5.0});
+  HardCase c = TargetCase("huge/ground-quadric", b);
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const glm::dvec3 cam = {rng.Uniform(-500.0, 500.0), std::exp(rng.Uniform(std::log(10.0), std::log(100.0))),
+                            rng.Uniform(-500.0, 500.0)};
+    glm::dvec3 dir;
+    if (k % 3 == 2) {
+      dir = (k % 2 ? glm::dvec3(rng.Uniform(-3.0, 3.0), rng.Uniform(0.0, 2.0), rng.Uniform(-3.0, 3.0))
+                   : glm::dvec3(rng.Uniform(5.0, 11.0), rng.Uniform(0.0, 4.0), rng.Uniform(-1.0, 5.0))) -
+            cam;
+    } else {
+      const double theta = kPi * rng.Uniform(0.0, 85.0 / 180.0);
+      dir = AroundAxis({0.0, -1.0, 0.0}, theta, rng.Uniform(0.0, 2 * kPi));
+    }
+    c.rays.push_back(Rec(cam, dir));
+  }
+  SetTargets(c, 0.05, 1e-3);
+  return c;
+}
+
 // Small primitives seen from far away, the origins in or near their planes
 // (a random ray from a corner of a scene that holds a ground sphere): the
 // triangle is seen edge-on, every edge function lies below its rounding and
@@ -382,6 +421,12 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
                                "cameras 10..100 above, rays down at up to 85 degrees and at the small box.") +
                        expect,
                    false, [](AccelKind, const GenOptions& o) { return GroundBox(o); }});
+  specs.push_back({"huge/ground-quadric", "huge",
+                   std::string("A ground ellipsoid quadric 2e6 x 1e6 x 2e6 (top at y = 0, clipped to y >= -10) with a "
+                               "paraboloid bowl and a tilted hyperboloid on it; cameras 10..100 above, rays down at up "
+                               "to 85 degrees and at the small quadrics.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return GroundQuadric(o); }});
   specs.push_back({"huge/far-origins", "huge",
                    "8 triangles 0.5..3 across, 4 spheres and a cone near the origin; ray origins 1e5..2e6 away in "
                    "the triangles' planes (a third of them off the plane by up to 1e-3 of the distance), directions "

@@ -68,6 +68,16 @@ std::uint32_t SceneBuilder::AxisBox(const glm::dvec3& lo, const glm::dvec3& hi)
   return id;
 }
 
+std::uint32_t SceneBuilder::Quadric(const std::array<double, 10>& k, const glm::dvec3& lo, const glm::dvec3& hi)
+{
+  const std::uint32_t id = NextId();
+  std::vector<double> v(k.begin(), k.end());
+  v.insert(v.end(), {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z});
+  NffValues st("quadric", scene_->path, id + 1, std::move(v));
+  ReadGeometry(st, *scene_);
+  return id;
+}
+
 std::uint32_t SceneBuilder::Box(const glm::dvec3& lo, const glm::dvec3& hi)
 {
   const std::uint32_t first = NextId();
