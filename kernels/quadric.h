@@ -18,21 +18,28 @@
  *
  * Robust mode: each of a, bh, c is computed with its scale (the same sum of
  * absolute values: aS, bS, cS), float's error bounds follow from them, and
- * where a root that may lie in [tmin, tmax] may be off by more than 2^-19 of
- * the checker's tolerance scale |o|/|d| + |t| (an eighth of its 2^-16,
- * docs/TOLERANCE.md), or where the discriminant is within its own error of
+ * where a root that may lie in [tmin, tmax] may be off by more than 2^-17 of
+ * the checker's tolerance scale |o|/|d| + |t| (the checker allows 2^-16 of
+ * |o|inf + t |d|inf in world units, at least 2^-16 / sqrt(3) of that scale
+ * in t: the worst-case first-order bound stays within 0.87 of it; the real
+ * errors are far smaller, docs/TOLERANCE.md), or where the
+ * discriminant is within four times its own error of
  * 0 (hit or miss undecided), the whole test runs again in double-float from
  * the exact o - centre (Quadric_IntersectDf). That covers the quadric's
  * versions of the sphere's cases: a ground ellipsoid 1e6 across seen from
  * 10 above (c cancels), a tiny quadric far away (the discriminant cancels),
  * a ray leaving the surface (c near 0, its root near 0).
  *
- * Error bounds, first order, generously (u = 2^-24; x0 = o - centre is
- * rounded once, relative u): Q x0 + l per component within 5u of its
- * scale, so bh within 8u bS and c within 11u cS; a within 6u aS. We take
- * 2^-20 (16u) for a and bh and 2^-19 (32u) for c; the discriminant
- * bh^2 - a c within 2|bh| eb + |a| ec + |c| ea + 3u (bh^2 + |a c|); its root
- * within that over sqrt(disc) (disc above its error here); q within eb +
+ * Error bounds, first order (u = 2^-24; x0 = o - centre is rounded once,
+ * relative u): Q x0 + l per component within 5u of its scale (3 products, 3
+ * sums, x0's own rounding), so bh within 8u bS (3 more products and sums)
+ * and c within 11u cS; a within 6u aS. We take 8u for a, 10u for bh and 12u
+ * for c (a first version took 16u, 16u and 32u, the root's error as
+ * ed / sqrt(disc), against an eighth of the tolerance, and sent 20-35% of
+ * the tests of a plain scene to double-float, 4x slower); the discriminant
+ * bh^2 - a c within ed = 2|bh| eb + |a| ec + |c| ea + 3u (bh^2 + |a c|); its
+ * root within ed / (sqrt(disc) + sqrt(disc - ed)) <= 0.54 ed / sqrt(disc)
+ * (disc > 4 ed here; we take 0.5625); q within eb +
  * e_sq + u|q|; the roots within |t| (eq/|q| + ea/|a| + u) (q / a) and
  * ec/|q| + |t| (eq/|q| + u) (c / q). */
 #ifndef CELLRAY_KERNELS_QUADRIC_H
@@ -109,12 +116,12 @@ CR_COLD CR_FUNC int Quadric_IntersectDf(const real org[3], const real dir[3], co
 }
 
 /* Whether root t, within e of its true value, may lie in [tmin, tmax] while
- * e exceeds 2^-19 (|o|/|d| + |t|), the margin robust mode keeps from the
+ * e exceeds 2^-17 (|o|/|d| + |t|), the bound robust mode keeps within the
  * checker's tolerance. NaN (a = 0: the root q / a at infinity with a
  * possibly nonzero) counts as "may". */
 CR_FUNC int Quadric_RootNeedsDf(real t, real e, real oScale, real tmin, real tmax)
 {
-  if (e <= 0x1.0p-19f * (oScale + fabs(t))) return 0;
+  if (e <= 0x1.0p-17f * (oScale + fabs(t))) return 0;
   return !(t + e < tmin || t - e > tmax);
 }
 #endif
@@ -152,17 +159,18 @@ CR_FUNC int Quadric_Intersect(const Ray* r, const Quadric* s, real tmin, real tm
     const real bS = Dot3(ad, us);
     const real cS = ax[0] * (us[0] + fabs(s->l[0])) + ax[1] * (us[1] + fabs(s->l[1])) +
                     ax[2] * (us[2] + fabs(s->l[2])) + fabs(s->j);
-    const real ea = 0x1.0p-20f * aS, eb = 0x1.0p-20f * bS, ec = 0x1.0p-19f * cS;
+    const real ea = 0x1.0p-21f * aS, eb = 0x1.4p-21f * bS, ec = 0x1.8p-21f * cS;
     const real ed = 2.0f * fabs(bh) * eb + fabs(a) * ec + fabs(c) * ea + 0x1.0p-22f * (bh * bh + fabs(a * c));
     if (disc < -ed) return 0; /* a miss for certain */
-    /* Undecided, or a degenerate form (a = bh = 0): double-float. NaN and
-     * overflow fall through to it as well. */
-    if (!(disc > ed) || (a == 0.0f && bh == 0.0f))
+    /* Undecided or nearly (within 4 times its error: the square root's
+     * error bound below needs disc - ed >= 3 disc / 4), or a degenerate form
+     * (a = bh = 0): double-float. NaN and overflow fall through to it. */
+    if (!(disc > 4.0f * ed) || (a == 0.0f && bh == 0.0f))
       return Quadric_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
     const real sq = copysign(sqrt(disc), bh);
     const real q = -(bh + sq);
     const real t0 = q / a, t1 = c / q;
-    const real eq = eb + ed / fabs(sq) + 0x1.0p-24f * fabs(q);
+    const real eq = eb + 0x1.2p-1f * ed / fabs(sq) + 0x1.0p-24f * fabs(q);
     const real rq = eq / fabs(q) + 0x1.0p-24f;
     /* a = 0 with no error (aS = 0: a ray along a cylinder's axis) puts the
      * root q / a exactly at infinity. */

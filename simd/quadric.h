@@ -103,8 +103,8 @@ CR_SIMD_INLINE vbool<N> Quadric_IntersectN(const vfloat<N> org[3], const vfloat<
     const vfloat<N> bS = Dot3N<N>(ad, us);
     const vfloat<N> cS = ax[0] * (us[0] + Abs(s.l()[0])) + ax[1] * (us[1] + Abs(s.l()[1])) +
                          ax[2] * (us[2] + Abs(s.l()[2])) + Abs(s.j());
-    const vfloat<N> ea = vfloat<N>(0x1.0p-20f) * aS, eb = vfloat<N>(0x1.0p-20f) * bS;
-    const vfloat<N> ec = vfloat<N>(0x1.0p-19f) * cS;
+    const vfloat<N> ea = vfloat<N>(0x1.0p-21f) * aS, eb = vfloat<N>(0x1.4p-21f) * bS;
+    const vfloat<N> ec = vfloat<N>(0x1.8p-21f) * cS;
     const vfloat<N> ed = vfloat<N>(2.0f) * Abs(bh) * eb + Abs(a) * ec + Abs(c) * ea +
                          vfloat<N>(0x1.0p-22f) * (bh * bh + Abs(a * c));
     miss = disc < -ed;
@@ -112,18 +112,18 @@ CR_SIMD_INLINE vbool<N> Quadric_IntersectN(const vfloat<N> org[3], const vfloat<
       tHit = zero;
       return vbool<N>(false);
     }
-    const vbool<N> cold = (!(disc > ed)) | ((a == zero) & (bh == zero));
+    const vbool<N> cold = (!(disc > vfloat<N>(4.0f) * ed)) | ((a == zero) & (bh == zero));
     const vfloat<N> sq = CopySign(Sqrt(disc), bh);
     const vfloat<N> q = -(bh + sq);
     t0 = q / a;
     t1 = c / q;
-    const vfloat<N> eq = eb + ed / Abs(sq) + vfloat<N>(0x1.0p-24f) * Abs(q);
+    const vfloat<N> eq = eb + vfloat<N>(0x1.2p-1f) * ed / Abs(sq) + vfloat<N>(0x1.0p-24f) * Abs(q);
     const vfloat<N> rq = eq / Abs(q) + vfloat<N>(0x1.0p-24f);
     const vfloat<N> e0 = Select(ea == zero, Abs(t0) * rq, Abs(t0) * (rq + ea / Abs(a)));
     const vfloat<N> e1 = ec / Abs(q) + Abs(t1) * rq;
     const vfloat<N> oScale = FMax(Abs(org[0]), FMax(Abs(org[1]), Abs(org[2]))) / FMax(ad[0], FMax(ad[1], ad[2]));
     auto needs = [&](vfloat<N> t, vfloat<N> e) {
-      const vbool<N> accurate = e <= vfloat<N>(0x1.0p-19f) * (oScale + Abs(t));
+      const vbool<N> accurate = e <= vfloat<N>(0x1.0p-17f) * (oScale + Abs(t));
       return AndNot(!((t + e < tmin) | (t - e > tmax)), accurate);
     };
     refine = AndNot(lanes & (cold | needs(t0, e0) | needs(t1, e1)), miss);
