@@ -28,32 +28,6 @@ bool HaveOpenCL()
   return have;
 }
 
-// Every structure x ray kind on `backend` in `precision`: wrong answers.
-// Robust and fp64 must have none; fast is reported.
-void Conform(const Scene& scene, const std::string& name, Backend backend, Precision precision, int size)
-{
-  for (RayKind kind : kKinds) {
-    const auto rays = test::MakeRays(scene, kind, size);
-    for (AccelKind accel : kAccelKinds) {
-      TraceConfig cfg;
-      cfg.backend = backend;
-      cfg.accel = accel;
-      cfg.precision = precision;
-      auto r = test::CheckTracer(scene, cfg, rays, test::IsOcclusion(kind));
-      INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", BackendName(backend), " ",
-           PrecisionName(precision), ": ", r.wrong, " wrong of ", r.rays,
-           r.firstWrong.empty() ? std::string() : " (first " + std::to_string(r.firstWrong[0]) + ")");
-      CHECK(r.rays == rays.size());
-      if (precision == Precision::Fast) {
-        if (r.wrong) MESSAGE("reported, not asserted: ", name, " ", RayKindName(kind), " ", AccelKindName(accel), " ",
-                             BackendName(backend), " fast: ", r.wrong, " wrong of ", r.rays);
-      } else {
-        CHECK(r.wrong == 0);
-      }
-    }
-  }
-}
-
 // The hard scene: a ground ellipsoid 2e6 across under a camera 30 above,
 // a bowl and a cooling tower standing on it, and a tiny ellipsoid (0.01
 // across, 70 away) that AimedRays hits.
@@ -137,7 +111,8 @@ TEST_CASE("quadric: every family, every structure x CPU backend x precision agai
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/quadrics.nff"));
   REQUIRE(scene.quadrics.size() == 8);
   for (Backend backend : {Backend::Scalar, Backend::Simd})
-    for (Precision p : {Precision::Robust, Precision::Fp64, Precision::Fast}) Conform(scene, "quadrics", backend, p, 40);
+    for (Precision p : {Precision::Robust, Precision::Fp64, Precision::Fast})
+      test::CheckConformance(scene, "quadrics", backend, p, 40);
 }
 
 TEST_CASE("quadric: a ground ellipsoid 2e6 across, a tiny far one, rays leaving them: robust and fp64 0 wrong")
@@ -147,7 +122,7 @@ TEST_CASE("quadric: a ground ellipsoid 2e6 across, a tiny far one, rays leaving 
   const auto aimed = AimedRays();
   for (Backend backend : {Backend::Scalar, Backend::Simd})
     for (Precision p : {Precision::Robust, Precision::Fp64, Precision::Fast}) {
-      Conform(scene, "hard", backend, p, 48);
+      test::CheckConformance(scene, "hard", backend, p, 48);
       for (AccelKind accel : kAccelKinds) {
         TraceConfig cfg;
         cfg.backend = backend;
@@ -205,7 +180,7 @@ TEST_CASE("quadric: OpenCL, every structure, robust and fp64 against the referen
   Scene hard;
   ParseNFF(kHardScene, "hard-quadrics", hard);
   for (Precision p : {Precision::Robust, Precision::Fp64}) {
-    Conform(scene, "quadrics", Backend::OpenCL, p, 24);
-    Conform(hard, "hard", Backend::OpenCL, p, 24);
+    test::CheckConformance(scene, "quadrics", Backend::OpenCL, p, 24);
+    test::CheckConformance(hard, "hard", Backend::OpenCL, p, 24);
   }
 }

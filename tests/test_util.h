@@ -148,4 +148,30 @@ inline ref::CheckResult CheckTracer(const Scene& scene, const TraceConfig& confi
   return r;
 }
 
+// Every structure x ray kind (primary, shadow, diffuse, random; `size`^2
+// rays each) of one backend and precision against the fp64 reference:
+// robust and fp64 must have no wrong answer; fast is reported (MESSAGE),
+// not asserted.
+inline void CheckConformance(const Scene& scene, const std::string& name, Backend backend, Precision precision,
+                             int size)
+{
+  for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random}) {
+    const auto rays = MakeRays(scene, kind, size);
+    for (AccelKind accel : kAccelKinds) {
+      TraceConfig cfg;
+      cfg.backend = backend;
+      cfg.accel = accel;
+      cfg.precision = precision;
+      auto r = CheckTracer(scene, cfg, rays, IsOcclusion(kind));
+      const std::string what = name + " " + RayKindName(kind) + " " + AccelKindName(accel) + " " +
+                               BackendName(backend) + " " + PrecisionName(precision) + ": " +
+                               std::to_string(r.wrong) + " wrong of " + std::to_string(r.rays);
+      INFO(what, r.firstWrong.empty() ? std::string() : " (first " + std::to_string(r.firstWrong[0]) + ")");
+      CHECK(r.rays == rays.size());
+      if (precision != Precision::Fast) CHECK(r.wrong == 0);
+      else if (r.wrong) MESSAGE("reported, not asserted: ", what);
+    }
+  }
+}
+
 }  // namespace cr::test
