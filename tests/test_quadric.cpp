@@ -30,7 +30,7 @@ bool HaveOpenCL()
 
 // The hard scene: a ground ellipsoid 2e6 across under a camera 30 above,
 // a bowl and a cooling tower standing on it, and a tiny ellipsoid (0.01
-// across, 70 away) that AimedRays hits.
+// across, 70 away) that AimedRays hits, and a small triangle.
 const char* kHardScene =
     "v\nfrom 0 30 -60\nat 0 0 0\nup 0 1 0\nangle 50\nhither 0.01\nresolution 64 64\n"
     "b 0.2 0.2 0.3\nl 10 100 -50\n"
@@ -41,7 +41,9 @@ const char* kHardScene =
     "quadric 0.25 0 0.25 0 0 0 0 -1 0 0 -6 0 -6 6 9 6\n"
     "quadric 1 -0.25 1 0 0 0 -30 2.5 0 214.75 10 0 -5 20 10 5\n"
     // tiny ellipsoid, semi-axes 0.01 0.01 0.005, centred (0.5, 1, 40)
-    "quadric 1e4 1e4 4e4 0 0 0 -1e4 -2e4 -3.2e6 64012499 0.48 0.98 39.99 0.52 1.02 40.01\n";
+    "quadric 1e4 1e4 4e4 0 0 0 -1e4 -2e4 -3.2e6 64012499 0.48 0.98 39.99 0.52 1.02 40.01\n"
+    // a marker triangle: the same type set as quadrics.nff (one set of OpenCL programs)
+    "p 3\n-8 0 -6\n-6 0 -6\n-7 1.5 -6\n";
 
 // Rays from the camera at points in and around the tiny ellipsoid.
 std::vector<RayRecord> AimedRays()

@@ -303,7 +303,7 @@ HardCase GroundBox(const GenOptions& o)
 // The ground of GroundSphere as a quadric: the ellipsoid x^2 + 4 (y + 5e5)^2
 // + z^2 = 1e12 (semi-axes 1e6, 5e5, 1e6, its top at y = 0) clipped to
 // y >= -10, with a paraboloid bowl y = (x^2 + z^2) / 4 and a tilted
-// hyperboloid of one sheet on it; cameras 10..100 above, rays down at every
+// hyperboloid of one sheet on it (and a small triangle); cameras 10..100 above, rays down at every
 // angle up to 85 degrees from the vertical and at the two small quadrics.
 // The ground's c = f(o - centre) cancels 13 bits in float, as the ground
 // sphere's |f|^2 - r^2 does.
@@ -315,6 +315,9 @@ HardCase GroundQuadric(const GenOptions& o)
   b.Quadric({0.25, 0, 0.25, 0, 0, 0, 0, -1, 0, 0}, {-3.0, 0.0, -3.0}, {3.0, 2.25, 3.0});
   // (x - 8)^2 + (z - 2)^2 - (y - 2)^2 / 4 + 0.3 x y = 1, clipped to a box around it
   b.Quadric({1, -0.25, 1, 0.3, 0, 0, -16, 1, -4, 8 * 8 + 4 - 1 - 1}, {5.0, 0.0, -1.0}, {11.0, 4.0, 5.0});
+  // a marker triangle beside them: the scene's type set is the quadric scenes' of
+  // tests/test_quadric.cpp, so the OpenCL programs compile once for both
+  b.Triangle({-8.0, 0.0, -6.0}, {-6.0, 0.0, -6.0}, {-7.0, 1.5, -6.0});
   HardCase c = TargetCase("huge/ground-quadric", b);
   const std::size_t n = o.quick ? 1500 : 15000;
   for (std::size_t k = 0; k < n; ++k) {
