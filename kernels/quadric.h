@@ -50,12 +50,12 @@
 #define CR_HAS_QUADRIC 1
 #endif
 
-/* Q v for the symmetric Q of s (entries xx, yy, zz, xy, xz, yz). */
-CR_FUNC void Quadric_MulQ(const Quadric* s, const real v[3], real out[3])
+/* Q v for the symmetric Q with entries q: xx, yy, zz, xy, xz, yz. */
+CR_FUNC void Quadric_MulQ(const float q[6], const real v[3], real out[3])
 {
-  out[0] = (real)s->q[0] * v[0] + (real)s->q[3] * v[1] + (real)s->q[4] * v[2];
-  out[1] = (real)s->q[3] * v[0] + (real)s->q[1] * v[1] + (real)s->q[5] * v[2];
-  out[2] = (real)s->q[4] * v[0] + (real)s->q[5] * v[1] + (real)s->q[2] * v[2];
+  out[0] = (real)q[0] * v[0] + (real)q[3] * v[1] + (real)q[4] * v[2];
+  out[1] = (real)q[3] * v[0] + (real)q[1] * v[1] + (real)q[5] * v[2];
+  out[2] = (real)q[4] * v[0] + (real)q[5] * v[1] + (real)q[2] * v[2];
 }
 
 /* Is x0 + t d in the clip box? */
@@ -132,8 +132,8 @@ CR_FUNC int Quadric_Intersect(const Ray* r, const Quadric* s, real tmin, real tm
   real x0[3];
   CR_UNROLL for (int i = 0; i < 3; ++i) x0[i] = r->org[i] - (real)s->center[i];
   real qd[3], u[3];
-  Quadric_MulQ(s, r->dir, qd);
-  Quadric_MulQ(s, x0, u);
+  Quadric_MulQ(s->q, r->dir, qd);
+  Quadric_MulQ(s->q, x0, u);
   CR_UNROLL for (int i = 0; i < 3; ++i) u[i] = u[i] + (real)s->l[i];
   const real a = Dot3(r->dir, qd);
   const real bh = Dot3(r->dir, u);
@@ -143,17 +143,16 @@ CR_FUNC int Quadric_Intersect(const Ray* r, const Quadric* s, real tmin, real tm
 #if !defined(CR_FAST) && !defined(CR_FP64)
   {
     /* The scales: the same sums over absolute values. */
-    real ad[3], ax[3], aq[6], us[3];
+    real ad[3], ax[3], us[3];
+    float aq[6];
     CR_UNROLL for (int i = 0; i < 3; ++i) {
       ad[i] = fabs(r->dir[i]);
       ax[i] = fabs(x0[i]);
     }
-    Quadric aQ = *s;
     CR_UNROLL for (int i = 0; i < 6; ++i) aq[i] = fabs(s->q[i]);
-    CR_UNROLL for (int i = 0; i < 6; ++i) aQ.q[i] = aq[i];
     real qs[3];
-    Quadric_MulQ(&aQ, ad, qs);
-    Quadric_MulQ(&aQ, ax, us);
+    Quadric_MulQ(aq, ad, qs);
+    Quadric_MulQ(aq, ax, us);
     CR_UNROLL for (int i = 0; i < 3; ++i) us[i] = us[i] + fabs(s->l[i]);
     const real aS = Dot3(ad, qs);
     const real bS = Dot3(ad, us);

@@ -317,11 +317,9 @@ bool ParseNff(PrimTag<Quadric>, NffStatement& st, Scene& scene)
   for (int e = 0; e < 6; ++e) s.q[e] = float(Q[idx[e][0]][idx[e][1]] * scale);
   for (int i = 0; i < 3; ++i) s.l[i] = float(l[i] * scale);
   s.j = float(j * scale);
-  for (float v : s.q)
-    if (!std::isfinite(v)) st.Fail("'quadric': a coefficient overflows float about the clip box's centre");
-  for (float v : s.l)
-    if (!std::isfinite(v)) st.Fail("'quadric': a coefficient overflows float about the clip box's centre");
-  if (!std::isfinite(s.j)) st.Fail("'quadric': a coefficient overflows float about the clip box's centre");
+  // q[6] and l[3] lie back to back in the layout.
+  if (!std::isfinite(s.j) || !std::all_of(&s.q[0], &s.q[0] + 9, [](float v) { return std::isfinite(v); }))
+    st.Fail("'quadric': a coefficient overflows float about the clip box's centre");
   PrimInfo info = st.Info(CR_PRIM_QUADRIC);
   info.firstPiece = scene.AddPiece(s, scene.NumPrims());
   info.nPieces = 1;
