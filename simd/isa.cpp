@@ -10,11 +10,16 @@ bool IsaSupported(Isa isa)
 {
   switch (isa) {
     case Isa::Scalar: return true;
-#if defined(CELLRAY_SIMD_X86)
+// An ISA counts where the CPU runs it and the build has its kernels
+// (CELLRAY_SIMD_ISAS, simd/CMakeLists.txt).
+#if defined(CELLRAY_SIMD_SSE4)
     case Isa::Sse4: __builtin_cpu_init(); return __builtin_cpu_supports("sse4.1");
+#else
+    case Isa::Sse4: return false;
+#endif
+#if defined(CELLRAY_SIMD_AVX2)
     case Isa::Avx2: __builtin_cpu_init(); return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
-    case Isa::Sse4:
     case Isa::Avx2: return false;
 #endif
   }

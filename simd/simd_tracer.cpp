@@ -71,14 +71,18 @@ IsaEntry EntryOf(Isa isa)
 #if defined(CELLRAY_SIMD_X86)
 #define CR_SIMD_ENTRY_SELECT_(N, U, l, H, Nd) &ns::Select##N##Kernel,
 #define CR_SIMD_ENTRY_ORDER_(N, U, l, H, Nd) &ns::N##PacketOrder,
+#if defined(CELLRAY_SIMD_AVX2)
   if (isa == Isa::Avx2) {
     namespace ns = avx2;
     return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
   }
+#endif
+#if defined(CELLRAY_SIMD_SSE4)
   if (isa == Isa::Sse4) {
     namespace ns = sse4;
     return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
   }
+#endif
 #undef CR_SIMD_ENTRY_ORDER_
 #undef CR_SIMD_ENTRY_SELECT_
 #endif

@@ -657,6 +657,23 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
     CHECK(r.code == 0);
     CHECK(Slurp(hits) == expected);
   }
+  // CELLRAY_CL_TYPES=all: a program with every primitive type, the same
+  // answers; any value but scene or all is bad input by name.
+  {
+    const fs::path hits = dir / "types-all.hits";
+    const CliRun r = RunCellray("CELLRAY_CL_TYPES=all",
+                                fmt::format("{} --backend opencl -o {}", trace, hits.string()), dir);
+    INFO("stderr: ", r.err);
+    CHECK(r.code == 0);
+    CHECK(Slurp(hits) == expected);
+    const std::string options = nlohmann::json::parse(r.out)["build_options"];
+#define CR_HAS_ALL_(T, U, a) CHECK(options.find("-DCR_HAS_" #U "=1") != std::string::npos);
+    CR_PRIM_TYPES(CR_HAS_ALL_)
+#undef CR_HAS_ALL_
+    const CliRun bad = RunCellray("CELLRAY_CL_TYPES=some", fmt::format("{} --backend opencl", trace), dir);
+    CHECK(bad.code == kExitBadInput);
+    CHECK(bad.err.find("CELLRAY_CL_TYPES='some': expected scene or all") != std::string::npos);
+  }
   // A render falls back too (the first Trace fails), to the simd image.
   {
     const fs::path a = dir / "fallback.exr", b = dir / "simd.exr";

@@ -155,8 +155,12 @@ std::vector<KernelProbes> AvailableProbes()
 {
   std::vector<KernelProbes> out;
 #if defined(CELLRAY_SIMD_X86)
+#if defined(CELLRAY_SIMD_SSE4)
   if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back(simd::sse4::Probes());
+#endif
+#if defined(CELLRAY_SIMD_AVX2)
   if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back(simd::avx2::Probes());
+#endif
 #endif
   if (out.empty()) MESSAGE("SKIPPED: no SIMD ISA on this CPU");
   return out;

@@ -66,6 +66,16 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
   if (!s.generic) {
     s.types = 0;
     scene.ForEachType([&](const auto& pieces, std::uint32_t k) { s.types |= pieces.empty() ? 0u : 1u << k; });
+    // CELLRAY_CL_TYPES=all compiles every primitive type in, whatever the
+    // scene holds: one program per query serves every scene (a study over
+    // many scenes, the test suites) at the price of the absent types' code.
+    if (const char* types = std::getenv("CELLRAY_CL_TYPES"); types && *types) {
+      const std::string t = types;
+      if (t == "all")
+        s.types = (1u << CR_NUM_PRIM_TYPES) - 1u;
+      else if (t != "scene")
+        throw InputError(fmt::format("CELLRAY_CL_TYPES='{}': expected scene or all", t));
+    }
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
   // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was up to
