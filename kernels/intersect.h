@@ -33,6 +33,7 @@ typedef struct {
 #include "cone.h"
 #include "box.h"
 #include "quadric.h"
+#include "polyhedron.h"
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
  * robust mode: an exact float tie between two different spheres goes to the

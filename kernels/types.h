@@ -91,6 +91,22 @@ typedef struct {
   float l[3];
 } Quadric;
 
+/* Convex polyhedron (NFF extension `polyhedron N` and N planes): the solid
+ * where every plane's n . (p - center) + w <= 0, plane[k] = (n, w) with
+ * |n| about 1; count planes, at most CR_POLY_MAX_PLANES (host/prims/
+ * polyhedron.cpp refuses more); lo, hi: its float bounds (host use). 560
+ * bytes; the tests read the centre and count planes. */
+#define CR_POLY_MAX_PLANES 32
+typedef struct {
+  float center[3];
+  uint count;
+  float lo[3];
+  uint pad0;
+  float hi[3];
+  uint pad1;
+  float plane[CR_POLY_MAX_PLANES][4];
+} Polyhedron;
+
 /* The primitive types, one entry each, in unified-index order:
  * X(Type, UPPER, array): the layout `Type` (below), its index constant
  * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
@@ -100,13 +116,14 @@ typedef struct {
  * list (kernels/intersect.h, packet.cl). */
 #define CR_PRIM_TYPES(X) \
   X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes) \
-      X(Quadric, QUADRIC, quadrics)
+      X(Quadric, QUADRIC, quadrics) X(Polyhedron, POLYHEDRON, polyhedra)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
 #define CR_PRIM_BOX 3u
 #define CR_PRIM_QUADRIC 4u
-#define CR_NUM_PRIM_TYPES 5u
+#define CR_PRIM_POLYHEDRON 5u
+#define CR_NUM_PRIM_TYPES 6u
 /* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
@@ -233,6 +250,7 @@ static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof
 static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
 static_assert(sizeof(Box) == 32 && offsetof(Box, hi) == 16);
 static_assert(sizeof(Quadric) == 64 && offsetof(Quadric, extent) == 16 && offsetof(Quadric, q) == 28);
+static_assert(sizeof(Polyhedron) == 48 + 16 * CR_POLY_MAX_PLANES && offsetof(Polyhedron, plane) == 48);
 static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);

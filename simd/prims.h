@@ -25,3 +25,4 @@ struct SimdTest;
 #include "simd/cone.h"
 #include "simd/box.h"
 #include "simd/quadric.h"
+#include "simd/polyhedron.h"

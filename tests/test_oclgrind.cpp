@@ -3,7 +3,7 @@
 // values, data races (local and global) and API misuse: structure (grid,
 // octree, BVH) x variant (ray, packet) x query (closest, occlusion) x
 // precision (fast, robust, fp64) x primitive-type set (every non-empty subset
-// of spheres, triangles, cones, and boxes with quadrics: the backend compiles
+// of spheres, triangles, cones, and boxes with quadrics and polyhedra: the backend compiles
 // only the types a scene has), 288 configurations, the 12 robust ones with every type again with
 // their cold paths inlined (CELLRAY_CL_COLD=inline), plus the camera kernels with counters,
 // the generic programs and the renderer's unified hits. Each runs the real
@@ -120,13 +120,13 @@ fs::path Dir()
 
 struct TypeSet {
   const char* name;
-  bool spheres, triangles, cones, boxes = false, quadrics = false;
+  bool spheres, triangles, cones, boxes = false, quadrics = false, polyhedra = false;
 };
 // The subsets of the SPD's types, then the NFF extensions' types together
-// (box and quadric: one set, each program holding both).
+// (box, quadric and polyhedron: one set, each program holding the three).
 constexpr TypeSet kTypeSets[] = {{"s", true, false, false},  {"t", false, true, false}, {"c", false, false, true},
                                  {"st", true, true, false},  {"sc", true, false, true}, {"tc", false, true, true},
-                                 {"stc", true, true, true},  {"bq", false, false, false, true, true}};
+                                 {"stc", true, true, true},  {"bqh", false, false, false, true, true, true}};
 
 // A 3 x 3 x 2 block of primitives, the set's types in turn: 18 primitives,
 // enough for interior BVH nodes (leaves of 4), a subdivided octree (leaves
@@ -139,6 +139,7 @@ std::string SceneText(const TypeSet& ts)
   if (ts.cones) types.push_back('c');
   if (ts.boxes) types.push_back('b');
   if (ts.quadrics) types.push_back('q');
+  if (ts.polyhedra) types.push_back('h');
   std::string s =
       "b 0.1 0.1 0.1\nv\nfrom 0.3 -6 1.2\nat 0 0 0.55\nup 0 0 1\nangle 30\nhither 0.01\nresolution 4 4\n"
       "l 3 -6 6\nf 0.8 0.5 0.3 0.6 0.2 20 0.3 1.3\n";
@@ -159,6 +160,11 @@ std::string SceneText(const TypeSet& ts)
             s += fmt::format("quadric 4 9 6 0 2 0 {} {} {} {} {} {} {} {} {} {}\n", -8 * x - 2 * h, -18 * y,
                              -12 * h - 2 * x, 4 * x * x + 9 * y * y + 6 * h * h + 2 * x * h - 1, x - 0.6, y - 0.4,
                              h - 0.5, x + 0.6, y + 0.4, h + 0.3);
+            break;
+          case 'h':  // a tilted tetrahedron-like wedge: 5 planes about (x, y, h)
+            s += fmt::format("polyhedron 5\n0 0 -1 {}\n0.8 0 0.6 {}\n-0.8 0 0.6 {}\n0 0.8 0.6 {}\n0 -0.8 0.6 {}\n",
+                             h - 0.4, -0.8 * x - 0.6 * h - 0.3, 0.8 * x - 0.6 * h - 0.3, -0.8 * y - 0.6 * h - 0.3,
+                             0.8 * y - 0.6 * h - 0.3);
             break;
         }
       }

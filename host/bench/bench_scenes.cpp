@@ -36,8 +36,9 @@ std::optional<SceneRef> GeneratedRef(const std::string& name)
   auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
   if (ec != std::errc() || p != num.data() + num.size())
     throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics")
-    throw InputError(fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium and quadrics", name));
+  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics" && kind != "polyhedra")
+    throw InputError(
+        fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium, quadrics and polyhedra", name));
   return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
 }
 
@@ -124,7 +125,7 @@ std::vector<SceneRef> ResolveScenes(const std::vector<std::string>& names, std::
       }
     if (!found)
       throw InputError(fmt::format("unknown scene '{}': not a file, not an SPD scene (scenes/spd/{}.nff), not a mesh "
-                                   "(../shared/scenes/meshes/{}.obj), not gen:sphereflake|bumpy|stadium:N",
+                                   "(../shared/scenes/meshes/{}.obj), not gen:sphereflake|bumpy|stadium|quadrics|polyhedra:N",
                                    n, n, n));
   }
   return out;
@@ -139,6 +140,7 @@ Scene LoadBenchScene(const SceneRef& ref)
   if (kind == "sphereflake") return GenerateSphereflake(static_cast<int>(std::min<std::uint64_t>(n, 100)));
   if (kind == "bumpy") return GenerateBumpySphere(n);
   if (kind == "quadrics") return GenerateQuadricField(n);
+  if (kind == "polyhedra") return GeneratePolyhedronField(n);
   return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
 }
 

@@ -253,4 +253,76 @@ Scene GenerateQuadricField(std::uint64_t n)
   return s;
 }
 
+// Crystal face normals in their own frame, each with its support distance
+// (n . x <= h), by kind: cube, octahedron, truncated octahedron, a
+// hexagonal prism with pyramid caps.
+static std::vector<std::pair<glm::dvec3, double>> CrystalFaces(int kind)
+{
+  std::vector<std::pair<glm::dvec3, double>> f;
+  const glm::dvec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  if (kind == 0 || kind == 2)
+    for (const glm::dvec3& a : axes) {
+      f.push_back({a, 0.5});
+      f.push_back({-a, 0.5});
+    }
+  if (kind == 1 || kind == 2)
+    for (int k = 0; k < 8; ++k) {
+      const glm::dvec3 n(k & 1 ? -1 : 1, k & 2 ? -1 : 1, k & 4 ? -1 : 1);
+      f.push_back({glm::normalize(n), kind == 1 ? 0.5 : 0.75});
+    }
+  if (kind == 3) {
+    const double m = 0.5 / 0.35;  // caps 0.35 high on a prism 0.5 from its axis, 0.45 half-height
+    for (int k = 0; k < 6; ++k) {
+      const double a = kPi * k / 3.0;
+      f.push_back({{std::cos(a), std::sin(a), 0.0}, 0.5});
+      for (double sgn : {1.0, -1.0})
+        f.push_back({glm::normalize(glm::dvec3(std::cos(a), std::sin(a), sgn * m)),
+                     m * (0.45 + 0.35) / std::sqrt(1.0 + m * m)});
+    }
+  }
+  return f;
+}
+
+Scene GeneratePolyhedronField(std::uint64_t n)
+{
+  if (n < 1 || n > (std::uint64_t(1) << 24))
+    throw InputError(fmt::format("polyhedron field of {} polyhedra: expected 1 .. 2^24", n));
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+  const double half = side;  // cells 2 units across
+  Scene s = Base({float(-0.9 * half), float(-1.1 * half), float(0.25 * half + 3.0)}, {0.0f, 0.0f, 0.0f}, 45.0f);
+  s.lights = {Light{{float(-2 * half), float(-half), float(3 * half)}, glm::vec3(1)},
+              Light{{float(half), float(-2 * half), float(half)}, glm::vec3(0.6f)}};
+  s.materials.push_back(Material{{0.6f, 0.6f, 0.55f}, 0.8f, 0.0f, 10.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{0.8f, 0.4f, 0.3f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
+  s.materials.push_back(Material{{0.3f, 0.6f, 0.8f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
+  AddQuad(s, {half, half, 0.0}, {-half, half, 0.0}, {-half, -half, 0.0}, {half, -half, 0.0}, 1);
+  std::uint64_t state = 0x5851F42D4C957F2Dull;
+  auto uni = [&](double lo, double hi) {  // splitmix64
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
+  };
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const int kind = int(uni(0.0, 4.0));
+      const double scale = uni(0.9, 1.4);
+      const glm::dvec3 c(-half + 2.0 * i + 1.0, -half + 2.0 * j + 1.0, 0.5 * scale);
+      const double ax = uni(-0.6, 0.6), az = uni(0.0, 2.0 * kPi);
+      const glm::dmat3 rx(1, 0, 0, 0, std::cos(ax), std::sin(ax), 0, -std::sin(ax), std::cos(ax));
+      const glm::dmat3 rz(std::cos(az), std::sin(az), 0, -std::sin(az), std::cos(az), 0, 0, 0, 1);
+      const glm::dmat3 R = rz * rx;
+      const auto faces = CrystalFaces(kind);
+      std::vector<double> v = {double(faces.size())};
+      for (const auto& [n0, h] : faces) {
+        const glm::dvec3 nn = R * n0;
+        v.insert(v.end(), {nn.x, nn.y, nn.z, -(glm::dot(nn, c) + h * scale)});
+      }
+      NffValues st("polyhedron", s.path, long(s.NumPrims()), std::move(v), 2 + std::uint32_t(kind % 2));
+      ReadGeometry(st, s);
+    }
+  return s;
+}
+
 }  // namespace cr

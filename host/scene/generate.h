@@ -30,6 +30,12 @@ Scene GenerateStadium(int depth);
 // above one corner looking across (seeded: the same n gives the same scene).
 Scene GenerateQuadricField(std::uint64_t n);
 
+// A field of about n convex polyhedra (NFF extension `polyhedron`): cubes,
+// octahedra, truncated octahedra and capped hexagonal prisms, randomly
+// tilted, one per cell of a square grid on a ground quad (seeded), as the
+// quadric field.
+Scene GeneratePolyhedronField(std::uint64_t n);
+
 // Writes a generated scene (spheres and triangles) as NFF.
 void WriteNFF(const Scene& scene, const std::string& path);
 

@@ -74,6 +74,8 @@ class SceneBuilder {
   std::uint32_t AxisBox(const glm::dvec3& lo, const glm::dvec3& hi);
   // `quadric` statement: coefficients A..J (POV-Ray's order), clip box.
   std::uint32_t Quadric(const std::array<double, 10>& k, const glm::dvec3& lo, const glm::dvec3& hi);
+  // `polyhedron` statement: planes (a, b, c, d), a x + b y + c z + d <= 0.
+  std::uint32_t Polyhedron(const std::vector<glm::dvec4>& planes);
   std::uint32_t NextId() const { return scene_->NumPrims(); }
   Scene& Get() { return *scene_; }
   std::shared_ptr<const Scene> Finish() { return std::move(scene_); }

@@ -65,6 +65,18 @@ std::uint32_t RobustTarget(const ref::ReferenceTracer& tr, const RayRecord& rec,
     const Quadric& q = scene.quadrics[Prim_Local(&n, CR_PRIM_QUADRIC, h.g)];
     for (int a = 0; a < 3; ++a)  // inside the clip box, away from the rim
       if (std::fabs(p[a] - double(q.center[a])) > (1.0 - edgeFrac) * double(q.extent[a])) return kAnyPrim;
+  } else if (Prim_Is(&n, CR_PRIM_POLYHEDRON, h.g)) {
+    // Away from the edges: one face's plane through the point, every other
+    // plane's distance from it more than edgeFrac of the solid's size.
+    const Polyhedron& ph = scene.polyhedra[Prim_Local(&n, CR_PRIM_POLYHEDRON, h.g)];
+    const double size = glm::length(D(ph.hi) - D(ph.lo));
+    int near = 0;
+    for (std::uint32_t k = 0; k < ph.count; ++k) {
+      const glm::dvec3 nk = D(ph.plane[k]);
+      const double v = (glm::dot(nk, p - D(ph.center)) + double(ph.plane[k][3])) / glm::length(nk);
+      if (std::fabs(v) <= edgeFrac * size) ++near;
+    }
+    if (near != 1) return kAnyPrim;
   }
   return scene.IdOfUnified(h.g);
 }
@@ -300,6 +312,90 @@ HardCase GroundBox(const GenOptions& o)
   return c;
 }
 
+// Convex polyhedra (`polyhedron`): a cube, an octahedron and a thin tilted
+// slab near the origin, the same three 1e6 away; rays from 5..50 away at
+// points of their faces, at their edges and vertices (and a float step off
+// them), and in the planes of the cube's faces.
+HardCase Polyhedra(const GenOptions& o)
+{
+  Rng rng(523);
+  SceneBuilder b;
+  std::vector<glm::dvec3> centres = {{0.0, 0.0, 0.0}, {1e6, 0.0, 1e6}};
+  std::vector<std::vector<glm::dvec3>> vertices;
+  for (const glm::dvec3& c : centres) {
+    std::vector<glm::dvec4> cube, octa, slab;
+    for (int a = 0; a < 3; ++a)
+      for (double s : {-1.0, 1.0}) {
+        glm::dvec4 p(0.0);
+        p[a] = s;
+        p.w = -(s * c[a] + 1.0);
+        cube.push_back(p);
+      }
+    const glm::dvec3 oc = c + glm::dvec3(4.0, 0.0, 0.0);
+    for (int k = 0; k < 8; ++k) {
+      const glm::dvec3 nn(k & 1 ? -1 : 1, k & 2 ? -1 : 1, k & 4 ? -1 : 1);
+      octa.push_back(glm::dvec4(nn, -(glm::dot(nn, oc) + 1.5)));
+    }
+    const glm::dvec3 sc = c + glm::dvec3(-4.0, 0.0, 0.0), sn(0.6, 0.8, 0.0);
+    slab = {glm::dvec4(sn, -(glm::dot(sn, sc) + 0.01)), glm::dvec4(-sn, glm::dot(sn, sc) - 0.01),
+            {0, 0, 1, -(sc.z + 1.0)}, {0, 0, -1, sc.z - 1.0}, {0.8, -0.6, 0, -(0.8 * sc.x - 0.6 * sc.y + 1.0)},
+            {-0.8, 0.6, 0, 0.8 * sc.x - 0.6 * sc.y - 1.0}};
+    b.Polyhedron(cube);
+    b.Polyhedron(octa);
+    b.Polyhedron(slab);
+    std::vector<glm::dvec3> v;
+    for (int k = 0; k < 8; ++k) v.push_back(c + glm::dvec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
+    for (int a = 0; a < 3; ++a)
+      for (double s : {-1.5, 1.5}) {
+        glm::dvec3 q = oc;
+        q[a] += s;
+        v.push_back(q);
+      }
+    vertices.push_back(v);
+  }
+  // a marker triangle: the type set of tests/test_polyhedron.cpp's scenes
+  b.Triangle({-8.0, 0.0, -6.0}, {-6.0, 0.0, -6.0}, {-7.0, 1.5, -6.0});
+  HardCase c = TargetCase("huge/polyhedra", b);
+  const std::size_t n = o.quick ? 1500 : 15000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::size_t which = k % 2;
+    const glm::dvec3& base = centres[which];
+    const std::vector<glm::dvec3>& v = vertices[which];
+    glm::dvec3 target;
+    switch (k % 5) {
+      case 0: target = v[rng.Below(std::uint32_t(v.size()))]; break;                       // a vertex
+      case 1: {                                                             // an edge point
+        const glm::dvec3 a = v[rng.Below(8)];
+        glm::dvec3 e = a;
+        const int axis = int(rng.Below(3));
+        e[axis] = base[axis] - (a[axis] - base[axis]);
+        target = a + rng.Uniform(0.0, 1.0) * (e - a);
+        break;
+      }
+      case 2: {  // in a cube face's plane, running along it
+        const int axis = int(rng.Below(3));
+        glm::dvec3 o0 = base + glm::dvec3(rng.Uniform(-1.2, 1.2), rng.Uniform(-1.2, 1.2), rng.Uniform(-1.2, 1.2));
+        o0[axis] = base[axis] + (rng.Below(2) ? 1.0 : -1.0);
+        glm::dvec3 d(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
+        d[axis] = 0.0;
+        const glm::dvec3 from = o0 - 20.0 * d;
+        c.rays.push_back(Rec(from, d));
+        continue;
+      }
+      default:
+        target = base + glm::dvec3(rng.Uniform(-5.0, 5.0), rng.Uniform(-1.6, 1.6), rng.Uniform(-1.6, 1.6));
+        break;
+    }
+    const glm::dvec3 away = AroundAxis({0.0, 0.0, 1.0}, rng.Uniform(0.0, kPi), rng.Uniform(0.0, 2 * kPi));
+    const glm::dvec3 cam = base + std::exp(rng.Uniform(std::log(5.0), std::log(50.0))) * away;
+    glm::dvec3 dir = target - cam;
+    if (k % 7 == 3) dir += glm::dvec3(std::nextafter(float(dir.x), INFINITY) - float(dir.x), 0.0, 0.0);
+    c.rays.push_back(Rec(cam, dir));
+  }
+  SetTargets(c, 0.05, 1e-4);
+  return c;
+}
+
 // The ground of GroundSphere as a quadric: the ellipsoid x^2 + 4 (y + 5e5)^2
 // + z^2 = 1e12 (semi-axes 1e6, 5e5, 1e6, its top at y = 0) clipped to
 // y >= -10, with a paraboloid bowl y = (x^2 + z^2) / 4 and a tilted
@@ -430,6 +526,12 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
                                "to 85 degrees and at the small quadrics.") +
                        expect,
                    false, [](AccelKind, const GenOptions& o) { return GroundQuadric(o); }});
+  specs.push_back({"huge/polyhedra", "huge",
+                   std::string("Convex polyhedra (a cube, an octahedron, a slab 0.02 thick and tilted) near the "
+                               "origin and the same 1e6 away; rays from 5..50 away at their vertices and edges (some "
+                               "a float step off), at random points near them, and lying in the cube's face planes.") +
+                       expect,
+                   false, [](AccelKind, const GenOptions& o) { return Polyhedra(o); }});
   specs.push_back({"huge/far-origins", "huge",
                    "8 triangles 0.5..3 across, 4 spheres and a cone near the origin; ray origins 1e5..2e6 away in "
                    "the triangles' planes (a third of them off the plane by up to 1e-3 of the distance), directions "

@@ -78,6 +78,16 @@ std::uint32_t SceneBuilder::Quadric(const std::array<double, 10>& k, const glm::
   return id;
 }
 
+std::uint32_t SceneBuilder::Polyhedron(const std::vector<glm::dvec4>& planes)
+{
+  const std::uint32_t id = NextId();
+  std::vector<double> v = {double(planes.size())};
+  for (const glm::dvec4& p : planes) v.insert(v.end(), {p.x, p.y, p.z, p.w});
+  NffValues st("polyhedron", scene_->path, id + 1, std::move(v));
+  ReadGeometry(st, *scene_);
+  return id;
+}
+
 std::uint32_t SceneBuilder::Box(const glm::dvec3& lo, const glm::dvec3& hi)
 {
   const std::uint32_t first = NextId();
