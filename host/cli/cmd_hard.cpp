@@ -42,6 +42,8 @@ Run RegisterHard(CLI::App& app)
       std::fprintf(stderr, "%-36s %-6s %-6s %-6s %s\n", r.caseName.c_str(), AccelKindName(r.accel), BackendName(r.backend),
                    PrecisionName(r.precision),
                    r.skipped ? "skip" : fmt::format("{} wrong of {}", r.wrong, r.rays).c_str());
+      // A required combination that failed: its first wrong rays.
+      if (r.required && r.wrong > 0 && !r.note.empty()) std::fprintf(stderr, "    %s\n", r.note.c_str());
     };
     SetWarningsQuiet(true);
     const auto t0 = std::chrono::steady_clock::now();

@@ -393,6 +393,11 @@ HardCase Polyhedra(const GenOptions& o)
     c.rays.push_back(Rec(cam, dir));
   }
   SetTargets(c, 0.05, 1e-4);
+  // A ray aimed at a vertex or an edge may touch that solid at one point
+  // (or pass it by an ulp) before the surface the reference meets: those
+  // are judged by check's tolerance (the reference's answer), not by id.
+  for (std::size_t k = 0; k < c.rays.size(); ++k)
+    if (k % 5 <= 1) c.target[k] = kAnyPrim;
   return c;
 }
 
@@ -529,7 +534,8 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
   specs.push_back({"huge/polyhedra", "huge",
                    std::string("Convex polyhedra (a cube, an octahedron, a slab 0.02 thick and tilted) near the "
                                "origin and the same 1e6 away; rays from 5..50 away at their vertices and edges (some "
-                               "a float step off), at random points near them, and lying in the cube's face planes.") +
+                               "a float step off; judged by check's tolerance), at random points near them, and lying in "
+                               "the cube's face planes.") +
                        expect,
                    false, [](AccelKind, const GenOptions& o) { return Polyhedra(o); }});
   specs.push_back({"huge/far-origins", "huge",
