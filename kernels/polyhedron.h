@@ -14,13 +14,12 @@
  *
  * Precision modes: `fast` and `fp64` evaluate s and e in `real` (fp64: each
  * product of two floats is exact in double, the sums round once or twice);
- * `robust` in double-float (kernels/numeric.h: o - c and the products are
- * exact, each sum keeps about 48 bits), so every t, and every comparison
- * between an entry and an exit, is right to about 2^-44 relative, whatever
- * the coordinates' magnitude and however nearly the ray runs along a face;
- * t is that double-float value rounded once. No error bound and no cold path:
- * a polyhedron's planes are few and each costs a dozen double-float
- * operations. */
+ * `robust` in float with error bounds, and where a bound leaves a decision
+ * open, in double-float (kernels/numeric.h: o - c and the products are
+ * exact, each sum keeps about 48 bits), so that every t, and every
+ * comparison between an entry and an exit, is right to about 2^-44
+ * relative whatever the coordinates' magnitude and however nearly the ray
+ * runs along a face (Polyhedron_IntersectRobust below). */
 #ifndef CELLRAY_KERNELS_POLYHEDRON_H
 #define CELLRAY_KERNELS_POLYHEDRON_H
 #include "numeric.h"
@@ -99,6 +98,75 @@ CR_FUNC int Polyhedron_IntersectDf(const real org[3], const real dir[3], const P
 }
 #endif
 
+#if !defined(CR_FAST) && !defined(CR_FP64)
+/* Robust mode: slab clipping in float with a bound on each rounding error,
+ * falling back to the double-float form above wherever a bound leaves a
+ * decision open or the hit's t less accurate than 2^-21 |t| (about 8
+ * ulps):
+ * - x = o - m rounds once (u |x|); s = n . x + w then carries at most
+ *   6u (|n| . |x| + |w|) < 2^-21 S, e = n . d at most 3u |n| . |d| < 2^-22 E
+ *   (u = 2^-24);
+ * - a plane whose e is within its bound of 0 (sign unknown, or parallel)
+ *   goes to double-float;
+ * - t = -s / e is off by at most (es + |t| ee) / (|e| - ee) + u |t|; the
+ *   latest entry keeps the bound of its plane, or, where another entry lies
+ *   within both bounds of it, the larger bound (the true latest entry is
+ *   then within it of the float one), and likewise the earliest exit;
+ * - double-float again where entry and exit, or the chosen t and tmin or
+ *   tmax, lie within their bounds of each other.
+ * The SIMD backend runs this same function lane by lane, so its bits are
+ * these. */
+CR_FUNC int Polyhedron_IntersectRobust(const real org[3], const real dir[3], const Polyhedron* p, real tmin,
+                                       real tmax, real* tHit)
+{
+  real x[3], ax[3], ad[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    x[i] = org[i] - p->center[i];
+    ax[i] = fabs(x[i]);
+    ad[i] = fabs(dir[i]);
+  }
+  real tn = -CR_INF, tf = CR_INF, en = 0.0f, ef = 0.0f;
+  for (uint k = 0u; k < p->count; ++k) {
+    const float* n = p->plane[k];
+    const real s = (n[0] * x[0] + n[1] * x[1] + n[2] * x[2]) + n[3];
+    const real e = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+    const real es = 0x1.0p-21f * ((fabs(n[0]) * ax[0] + fabs(n[1]) * ax[1] + fabs(n[2]) * ax[2]) + fabs(n[3]));
+    const real ee = 0x1.0p-22f * (fabs(n[0]) * ad[0] + fabs(n[1]) * ad[1] + fabs(n[2]) * ad[2]);
+    if (!(fabs(e) > ee)) return Polyhedron_IntersectDf(org, dir, p, tmin, tmax, tHit);
+    const real t = -s / e;
+    const real et = (es + fabs(t) * ee) / (fabs(e) - ee) + 0x1.0p-24f * fabs(t);
+    if (e < 0.0f) {
+      if (t - et > tn + en) {
+        tn = t;
+        en = et;
+      } else if (t + et >= tn - en) {
+        tn = fmax(tn, t);
+        en = fmax(en, et);
+      }
+    } else {
+      if (t + et < tf - ef) {
+        tf = t;
+        ef = et;
+      } else if (t - et <= tf + ef) {
+        tf = fmin(tf, t);
+        ef = fmax(ef, et);
+      }
+    }
+  }
+  /* A bounded solid: some plane is entered and some left; tn, tf finite. */
+  if (tn - en > tf + ef) return 0; /* certainly apart */
+  if (!(tn + en < tf - ef)) return Polyhedron_IntersectDf(org, dir, p, tmin, tmax, tHit);
+  if (!(fabs(tn - tmin) > en)) return Polyhedron_IntersectDf(org, dir, p, tmin, tmax, tHit);
+  const real t = tn >= tmin ? tn : tf;
+  const real et = tn >= tmin ? en : ef;
+  if (!(fabs(t - tmin) > et && fabs(t - tmax) > et)) return Polyhedron_IntersectDf(org, dir, p, tmin, tmax, tHit);
+  if (!(t >= tmin && t <= tmax)) return 0;
+  if (!(et <= 0x1.0p-21f * fabs(t))) return Polyhedron_IntersectDf(org, dir, p, tmin, tmax, tHit);
+  *tHit = t;
+  return 1;
+}
+#endif
+
 CR_FUNC int Polyhedron_Test(const Ray* r, const Polyhedron* p, real tmin, real tmax, real* tHit, real* u, real* v)
 {
   (void)u;
@@ -106,7 +174,7 @@ CR_FUNC int Polyhedron_Test(const Ray* r, const Polyhedron* p, real tmin, real t
 #if defined(CR_FAST) || defined(CR_FP64)
   return Polyhedron_IntersectR(r->org, r->dir, p, tmin, tmax, tHit);
 #else
-  return Polyhedron_IntersectDf(r->org, r->dir, p, tmin, tmax, tHit);
+  return Polyhedron_IntersectRobust(r->org, r->dir, p, tmin, tmax, tHit);
 #endif
 }
 /* A copy of a polyhedron in global memory: its planes only. */

@@ -2,7 +2,7 @@
 // one polyhedron to the next (up to 32, 528 bytes a record), so its pack
 // holds the primitives' indices only and each lane runs the scalar kernels'
 // test (kernels/polyhedron.h: Polyhedron_IntersectR in fast mode,
-// Polyhedron_IntersectDf in robust mode) on the scene's record: every lane
+// Polyhedron_IntersectRobust in robust mode) on the scene's record: every lane
 // gets the scalar kernel's bits. Not vectorised across lanes: a first form,
 // measured in docs/BENCHMARKS.md.
 #pragma once
@@ -46,7 +46,7 @@ CR_SIMD_INLINE bool Polyhedron_Lane(const vfloat<N> org[3], const vfloat<N> dir[
   if constexpr (kFast)
     return Polyhedron_IntersectR(o, d, &p, tmin[l], tmax[l], th) != 0;
   else
-    return Polyhedron_IntersectDf(o, d, &p, tmin[l], tmax[l], th) != 0;
+    return Polyhedron_IntersectRobust(o, d, &p, tmin[l], tmax[l], th) != 0;
 }
 
 // Runs test(l, &t) for the lanes of `bits`; the lanes that hit, with t.
