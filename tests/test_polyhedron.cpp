@@ -9,7 +9,6 @@
 
 #include <fmt/format.h>
 
-#include "host/cl/cl_device.h"
 #include "host/core/error.h"
 #include "tests/test_util.h"
 
@@ -17,19 +16,6 @@ using namespace cr;
 
 namespace {
 
-const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
-
-bool HaveOpenCL()
-{
-  static const bool have = [] {
-    try {
-      return !ListClDevices().empty();
-    } catch (const std::exception&) {
-      return false;
-    }
-  }();
-  return have;
-}
 
 // A cube [-1, 1]^3 as six planes.
 const char* kCube = "polyhedron 6\n1 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n0 0 -1 -1\n";
@@ -189,30 +175,13 @@ TEST_CASE("polyhedron: SIMD answers equal the scalar kernels' bit for bit (robus
   Scene hard;
   ParseNFF(HardScene(), "hard-polyhedra", hard);
   const Scene& field = test::CachedScene(test::SourcePath("scenes/geometry/polyhedra.nff"));
-  for (const Scene* scene : {&field, static_cast<const Scene*>(&hard)})
-    for (RayKind kind : kKinds) {
-      const auto rays = test::MakeRays(*scene, kind, 48);
-      for (Precision p : {Precision::Robust, Precision::Fast}) {
-        TraceConfig sc;
-        sc.backend = Backend::Scalar;
-        sc.precision = p;
-        std::vector<HitRecord> want, got;
-        CreateTracer(*scene, sc)->Trace(rays, want, test::IsOcclusion(kind), nullptr);
-        for (const char* variant : {"single", "packet"}) {
-          TraceConfig cfg = sc;
-          cfg.backend = Backend::Simd;
-          cfg.variant = variant;
-          CreateTracer(*scene, cfg)->Trace(rays, got, test::IsOcclusion(kind), nullptr);
-          INFO(RayKindName(kind), " ", PrecisionName(p), " ", variant);
-          CHECK(test::CountDiffering(want, got, test::IsOcclusion(kind)) == 0);
-        }
-      }
-    }
+  test::CheckSimdEqualsScalar(field, 48);
+  test::CheckSimdEqualsScalar(hard, 48);
 }
 
 TEST_CASE("polyhedron: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!HaveOpenCL()) {
+  if (!test::HaveOpenCLDevice()) {
     MESSAGE("SKIPPED: no OpenCL device");
     return;
   }

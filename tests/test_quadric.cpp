@@ -6,7 +6,6 @@
 // leaving the surfaces).
 #include <cmath>
 
-#include "host/cl/cl_device.h"
 #include "host/core/error.h"
 #include "tests/test_util.h"
 
@@ -14,19 +13,6 @@ using namespace cr;
 
 namespace {
 
-const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
-
-bool HaveOpenCL()
-{
-  static const bool have = [] {
-    try {
-      return !ListClDevices().empty();
-    } catch (const std::exception&) {
-      return false;
-    }
-  }();
-  return have;
-}
 
 // The hard scene: a ground ellipsoid 2e6 across under a camera 30 above,
 // a bowl and a cooling tower standing on it, and a tiny ellipsoid (0.01
@@ -150,30 +136,13 @@ TEST_CASE("quadric: SIMD answers equal the scalar kernels' bit for bit (robust a
   Scene hard;
   ParseNFF(kHardScene, "hard-quadrics", hard);
   const Scene& fam = test::CachedScene(test::SourcePath("scenes/geometry/quadrics.nff"));
-  for (const Scene* scene : {&fam, static_cast<const Scene*>(&hard)})
-    for (RayKind kind : kKinds) {
-      const auto rays = test::MakeRays(*scene, kind, 48);
-      for (Precision p : {Precision::Robust, Precision::Fast}) {
-        TraceConfig sc;
-        sc.backend = Backend::Scalar;
-        sc.precision = p;
-        std::vector<HitRecord> want, got;
-        CreateTracer(*scene, sc)->Trace(rays, want, test::IsOcclusion(kind), nullptr);
-        for (const char* variant : {"single", "packet"}) {
-          TraceConfig cfg = sc;
-          cfg.backend = Backend::Simd;
-          cfg.variant = variant;
-          CreateTracer(*scene, cfg)->Trace(rays, got, test::IsOcclusion(kind), nullptr);
-          INFO(RayKindName(kind), " ", PrecisionName(p), " ", variant);
-          CHECK(test::CountDiffering(want, got, test::IsOcclusion(kind)) == 0);
-        }
-      }
-    }
+  test::CheckSimdEqualsScalar(fam, 48);
+  test::CheckSimdEqualsScalar(hard, 48);
 }
 
 TEST_CASE("quadric: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!HaveOpenCL()) {
+  if (!test::HaveOpenCLDevice()) {
     MESSAGE("SKIPPED: no OpenCL device");
     return;
   }

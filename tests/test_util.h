@@ -2,6 +2,7 @@
 // the conformance check of any tracer against the fp64 reference.
 #pragma once
 
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -14,6 +15,7 @@
 
 #include <doctest/doctest.h>
 
+#include "host/cl/cl_device.h"
 #include "host/io/rays_io.h"
 #include "host/rays/raygen.h"
 #include "host/reference/check.h"
@@ -99,14 +101,43 @@ inline const Scene& CachedScene(const std::string& path)
   return *slot;
 }
 
+// A digest of the scene's primitives (FNV-1a over every type's array and
+// the statement count): a scene built later at the address of a destroyed
+// one (a local Scene in another test case of the same process) must not
+// get the destroyed scene's reference.
+inline std::uint64_t SceneDigest(const Scene& scene)
+{
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  const std::uint32_t n = scene.NumPrims();
+  mix(&n, sizeof n);
+  scene.ForEachType([&](const auto& pieces, std::uint32_t) {
+    const std::size_t count = pieces.size();
+    mix(&count, sizeof count);
+    if (count) mix(pieces.data(), count * sizeof(pieces[0]));
+  });
+  return h;
+}
+
 inline const ref::ReferenceTracer& CachedReference(const Scene& scene)
 {
+  struct Entry {
+    std::uint64_t digest = 0;
+    std::unique_ptr<ref::ReferenceTracer> tracer;
+  };
   static std::mutex mutex;
-  static std::map<const Scene*, std::unique_ptr<ref::ReferenceTracer>> cache;
+  static std::map<const Scene*, Entry> cache;
   std::lock_guard<std::mutex> lock(mutex);
-  auto& slot = cache[&scene];
-  if (!slot) slot = std::make_unique<ref::ReferenceTracer>(scene);
-  return *slot;
+  Entry& slot = cache[&scene];
+  const std::uint64_t digest = SceneDigest(scene);
+  if (!slot.tracer || slot.digest != digest) {
+    slot.tracer = std::make_unique<ref::ReferenceTracer>(scene);
+    slot.digest = digest;
+  }
+  return *slot.tracer;
 }
 
 // A ray set of the given kind with about size * size rays.
@@ -170,6 +201,43 @@ inline void CheckConformance(const Scene& scene, const std::string& name, Backen
       CHECK(r.rays == rays.size());
       if (precision != Precision::Fast) CHECK(r.wrong == 0);
       else if (r.wrong) MESSAGE("reported, not asserted: ", what);
+    }
+  }
+}
+
+// Whether an OpenCL device is present (a failure to list counts as none).
+inline bool HaveOpenCLDevice()
+{
+  static const bool have = [] {
+    try {
+      return !ListClDevices().empty();
+    } catch (const std::exception&) {
+      return false;
+    }
+  }();
+  return have;
+}
+
+// The SIMD backend (single and packet) answers as the scalar kernels do, bit
+// for bit, in robust and fast precision, for every ray kind on the scene.
+inline void CheckSimdEqualsScalar(const Scene& scene, int size)
+{
+  for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random}) {
+    const auto rays = MakeRays(scene, kind, size);
+    for (Precision p : {Precision::Robust, Precision::Fast}) {
+      TraceConfig sc;
+      sc.backend = Backend::Scalar;
+      sc.precision = p;
+      std::vector<HitRecord> want, got;
+      CreateTracer(scene, sc)->Trace(rays, want, IsOcclusion(kind), nullptr);
+      for (const char* variant : {"single", "packet"}) {
+        TraceConfig cfg = sc;
+        cfg.backend = Backend::Simd;
+        cfg.variant = variant;
+        CreateTracer(scene, cfg)->Trace(rays, got, IsOcclusion(kind), nullptr);
+        INFO(RayKindName(kind), " ", PrecisionName(p), " ", variant);
+        CHECK(CountDiffering(want, got, IsOcclusion(kind)) == 0);
+      }
     }
   }
 }

@@ -85,19 +85,6 @@ std::vector<Plane> StoredPlanes(const Polyhedron& p)
   return out;
 }
 
-float Down(double v)
-{
-  float f = float(v);
-  if (double(f) > v) f = std::nextafter(f, -INFINITY);
-  return f;
-}
-float Up(double v)
-{
-  float f = float(v);
-  if (double(f) < v) f = std::nextafter(f, INFINITY);
-  return f;
-}
-
 }  // namespace
 
 const char* PrimTypeName(PrimTag<Polyhedron>) { return "polyhedron"; }
@@ -291,8 +278,8 @@ bool ParseNff(PrimTag<Polyhedron>, NffStatement& st, Scene& scene)
   }
   const double pad = 1e-6 * size;
   for (int a = 0; a < 3; ++a) {
-    p.lo[a] = Down(c[a] + lo[a] - pad);
-    p.hi[a] = Up(c[a] + hi[a] + pad);
+    p.lo[a] = FloatDown(c[a] + lo[a] - pad);
+    p.hi[a] = FloatUp(c[a] + hi[a] + pad);
   }
   PrimInfo info = st.Info(CR_PRIM_POLYHEDRON);
   info.firstPiece = scene.AddPiece(p, scene.NumPrims());

@@ -108,6 +108,20 @@ inline bool PrimOverlapsBox(const Scene& scene, const PrimRanges& r, std::uint32
   return scene.Visit(r, g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, lo, hi); });
 }
 
+// v rounded to float towards -inf / +inf (the types' outward bounds).
+inline float FloatDown(double v)
+{
+  float f = float(v);
+  if (double(f) > v) f = std::nextafter(f, -INFINITY);
+  return f;
+}
+inline float FloatUp(double v)
+{
+  float f = float(v);
+  if (double(f) < v) f = std::nextafter(f, INFINITY);
+  return f;
+}
+
 // Largest component magnitude (shared by the types' Scale and SurfaceAt).
 inline double MaxAbs(const glm::dvec3& v) { return std::max(std::fabs(v.x), std::max(std::fabs(v.y), std::fabs(v.z))); }
 

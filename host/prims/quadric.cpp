@@ -126,20 +126,6 @@ bool MayVanish(const Quadric& s, glm::dvec3 lo, glm::dvec3 hi, int depth)
   return MayVanish(s, lo, h1, depth - 1) || MayVanish(s, l2, hi, depth - 1);
 }
 
-// Float rounded towards -inf / +inf.
-float Down(double v)
-{
-  float f = float(v);
-  if (double(f) > v) f = std::nextafter(f, -INFINITY);
-  return f;
-}
-float Up(double v)
-{
-  float f = float(v);
-  if (double(f) < v) f = std::nextafter(f, INFINITY);
-  return f;
-}
-
 }  // namespace
 
 const char* PrimTypeName(PrimTag<Quadric>) { return "quadric"; }
@@ -148,8 +134,8 @@ Bounds FloatBounds(const Quadric& s)
 {
   Bounds b;
   for (int i = 0; i < 3; ++i) {
-    b.lo[i] = Down(double(s.center[i]) - double(s.extent[i]));
-    b.hi[i] = Up(double(s.center[i]) + double(s.extent[i]));
+    b.lo[i] = FloatDown(double(s.center[i]) - double(s.extent[i]));
+    b.hi[i] = FloatUp(double(s.center[i]) + double(s.extent[i]));
   }
   return b;
 }
@@ -292,7 +278,7 @@ bool ParseNff(PrimTag<Quadric>, NffStatement& st, Scene& scene)
   for (int a = 0; a < 3; ++a) {
     s.center[a] = float(0.5 * (lo[a] + hi[a]));
     m[a] = double(s.center[a]);
-    s.extent[a] = Up(std::max(hi[a] - m[a], m[a] - lo[a]));
+    s.extent[a] = FloatUp(std::max(hi[a] - m[a], m[a] - lo[a]));
     h[a] = double(s.extent[a]);
   }
   // Q (symmetric), L / 2, J about m: f(m + x) = x Q x + 2 (Q m + L / 2) x + f(m).

@@ -37,18 +37,6 @@ Bounds FloatBounds(const Triangle& t)
   return b;
 }
 
-// The largest float <= x and the smallest >= x (finite x).
-static float FloatDown(double x)
-{
-  const float f = static_cast<float>(x);
-  return double(f) <= x ? f : std::nextafter(f, -INFINITY);
-}
-static float FloatUp(double x)
-{
-  const float f = static_cast<float>(x);
-  return double(f) >= x ? f : std::nextafter(f, INFINITY);
-}
-
 // The triangle's two sides of the plane (Embree's splitTriangle): each
 // vertex goes to its side (both when on the plane), each edge that crosses
 // the plane adds its crossing point, computed in double, to both; each side's

@@ -192,12 +192,11 @@ void WriteNFF(const Scene& s, const std::string& path)
   });
 }
 
-Scene GenerateQuadricField(std::uint64_t n)
+// The frame of the generated fields (quadrics, polyhedra): a ground quad
+// 2 half across, the camera above one corner looking across, two lights,
+// the ground's material (1) and two shape materials (2, 3).
+static Scene FieldBase(double half)
 {
-  if (n < 1 || n > (std::uint64_t(1) << 24))
-    throw InputError(fmt::format("quadric field of {} quadrics: expected 1 .. 2^24", n));
-  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
-  const double half = side;  // cells 2 units across
   Scene s = Base({float(-0.9 * half), float(-1.1 * half), float(0.25 * half + 3.0)}, {0.0f, 0.0f, 0.0f}, 45.0f);
   s.lights = {Light{{float(-2 * half), float(-half), float(3 * half)}, glm::vec3(1)},
               Light{{float(half), float(-2 * half), float(half)}, glm::vec3(0.6f)}};
@@ -205,14 +204,28 @@ Scene GenerateQuadricField(std::uint64_t n)
   s.materials.push_back(Material{{0.8f, 0.4f, 0.3f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
   s.materials.push_back(Material{{0.3f, 0.6f, 0.8f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
   AddQuad(s, {half, half, 0.0}, {-half, half, 0.0}, {-half, -half, 0.0}, {half, -half, 0.0}, 1);
+  return s;
+}
+
+// A uniform number in [lo, hi) from splitmix64 state.
+static double SplitMix(std::uint64_t& state, double lo, double hi)
+{
+  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
+}
+
+Scene GenerateQuadricField(std::uint64_t n)
+{
+  if (n < 1 || n > (std::uint64_t(1) << 24))
+    throw InputError(fmt::format("quadric field of {} quadrics: expected 1 .. 2^24", n));
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+  const double half = side;  // cells 2 units across
+  Scene s = FieldBase(half);
   std::uint64_t state = 0x9E3779B97F4A7C15ull;
-  auto uni = [&](double lo, double hi) {  // splitmix64
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
-  };
+  auto uni = [&](double lo, double hi) { return SplitMix(state, lo, hi); };
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
       const glm::dvec3 c(-half + 2.0 * i + 1.0, -half + 2.0 * j + 1.0, uni(0.7, 0.9));
@@ -289,21 +302,9 @@ Scene GeneratePolyhedronField(std::uint64_t n)
     throw InputError(fmt::format("polyhedron field of {} polyhedra: expected 1 .. 2^24", n));
   const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
   const double half = side;  // cells 2 units across
-  Scene s = Base({float(-0.9 * half), float(-1.1 * half), float(0.25 * half + 3.0)}, {0.0f, 0.0f, 0.0f}, 45.0f);
-  s.lights = {Light{{float(-2 * half), float(-half), float(3 * half)}, glm::vec3(1)},
-              Light{{float(half), float(-2 * half), float(half)}, glm::vec3(0.6f)}};
-  s.materials.push_back(Material{{0.6f, 0.6f, 0.55f}, 0.8f, 0.0f, 10.0f, 0.0f, 1.0f});
-  s.materials.push_back(Material{{0.8f, 0.4f, 0.3f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
-  s.materials.push_back(Material{{0.3f, 0.6f, 0.8f}, 0.7f, 0.3f, 30.0f, 0.0f, 1.0f});
-  AddQuad(s, {half, half, 0.0}, {-half, half, 0.0}, {-half, -half, 0.0}, {half, -half, 0.0}, 1);
+  Scene s = FieldBase(half);
   std::uint64_t state = 0x5851F42D4C957F2Dull;
-  auto uni = [&](double lo, double hi) {  // splitmix64
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return lo + (hi - lo) * double(z >> 11) * 0x1.0p-53;
-  };
+  auto uni = [&](double lo, double hi) { return SplitMix(state, lo, hi); };
   for (int i = 0; i < side; ++i)
     for (int j = 0; j < side; ++j) {
       const int kind = int(uni(0.0, 4.0));
