@@ -112,25 +112,14 @@ TEST_CASE("polyhedron statement (extension): planes about the centre, ids in fil
       CHECK(hits[0].t == 4.0f);
     }
 
-  auto fails = [](const std::string& text, const char* what) {
-    Scene bad;
-    try {
-      ParseNFF(text, "bad.nff", bad);
-    } catch (const InputError& e) {
-      INFO(e.what());
-      CHECK(std::string(e.what()).find(what) != std::string::npos);
-      return;
-    }
-    FAIL("no error for: ", text);
-  };
-  fails("polyhedron 3\n1 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n", ":1: 'polyhedron': 3 planes (a bounded solid needs 4 to 32)");
-  fails("polyhedron 33\n", ":1: 'polyhedron': 33 planes");
-  fails("polyhedron 5\n1 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n", "unbounded");
-  fails("polyhedron 6\n1 0 0 1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n0 0 -1 -1\n", "enclose no solid");
-  fails("polyhedron 6\n1 0 0 -1\n-1 0 0 1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n0 0 -1 -1\n", "enclose no solid");
-  fails("polyhedron 4\n0 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n", "plane 1 (0 0 0 -1) has no direction");
-  fails("polyhedron 6\n1 0 0 -1\n-1 0 0 -1\n", ":3: truncated 'polyhedron' statement");
-  fails("polyhedron 4\n1 0 0 nan\n", "not a finite number");
+  test::CheckNffError("polyhedron 3\n1 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n", ":1: 'polyhedron': 3 planes (a bounded solid needs 4 to 32)");
+  test::CheckNffError("polyhedron 33\n", ":1: 'polyhedron': 33 planes");
+  test::CheckNffError("polyhedron 5\n1 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n", "unbounded");
+  test::CheckNffError("polyhedron 6\n1 0 0 1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n0 0 -1 -1\n", "enclose no solid");
+  test::CheckNffError("polyhedron 6\n1 0 0 -1\n-1 0 0 1\n0 1 0 -1\n0 -1 0 -1\n0 0 1 -1\n0 0 -1 -1\n", "enclose no solid");
+  test::CheckNffError("polyhedron 4\n0 0 0 -1\n-1 0 0 -1\n0 1 0 -1\n0 -1 0 -1\n", "plane 1 (0 0 0 -1) has no direction");
+  test::CheckNffError("polyhedron 6\n1 0 0 -1\n-1 0 0 -1\n", ":3: truncated 'polyhedron' statement");
+  test::CheckNffError("polyhedron 4\n1 0 0 nan\n", "not a finite number");
 }
 
 TEST_CASE("polyhedron: the crystal field, every structure x CPU backend x precision against the fp64 reference")

@@ -76,22 +76,11 @@ TEST_CASE("quadric statement (extension): stored about the box's centre, ids in 
   CHECK(b.lo == glm::vec3(0, -1, -1));
   CHECK(b.hi == glm::vec3(2, 1, 1));
 
-  auto fails = [](const char* text, const char* what) {
-    Scene bad;
-    try {
-      ParseNFF(text, "bad.nff", bad);
-    } catch (const InputError& e) {
-      INFO(e.what());
-      CHECK(std::string(e.what()).find(what) != std::string::npos);
-      return;
-    }
-    FAIL("no error for: ", text);
-  };
-  fails("s 0 0 0 1\nquadric 1 1 1 0 0 0 0 0 0 -1 -1 -1 -1 1 1 1 1\n", ":2: unknown statement '1'");
-  fails("quadric 1 1 1 0 0 0 0 0 0 -1 -1 -1 -1 1 1\n", ":1: truncated 'quadric' statement");
-  fails("quadric 1 1 1 0 0 0 0 0 0 -1 -1 1 -1 1 1 1\n", ":1: 'quadric': clip box ymin 1 is not less than ymax 1");
-  fails("quadric 0 0 0 0 0 0 0 0 0 -1 -1 -1 -1 1 1 1\n", ":1: 'quadric': coefficients A to I are all 0");
-  fails("quadric 1 1 1 0 0 0 0 0 0 nan -1 -1 -1 1 1 1\n", "not a finite number");
+  test::CheckNffError("s 0 0 0 1\nquadric 1 1 1 0 0 0 0 0 0 -1 -1 -1 -1 1 1 1 1\n", ":2: unknown statement '1'");
+  test::CheckNffError("quadric 1 1 1 0 0 0 0 0 0 -1 -1 -1 -1 1 1\n", ":1: truncated 'quadric' statement");
+  test::CheckNffError("quadric 1 1 1 0 0 0 0 0 0 -1 -1 1 -1 1 1 1\n", ":1: 'quadric': clip box ymin 1 is not less than ymax 1");
+  test::CheckNffError("quadric 0 0 0 0 0 0 0 0 0 -1 -1 -1 -1 1 1 1\n", ":1: 'quadric': coefficients A to I are all 0");
+  test::CheckNffError("quadric 1 1 1 0 0 0 0 0 0 nan -1 -1 -1 1 1 1\n", "not a finite number");
 }
 
 TEST_CASE("quadric: every family, every structure x CPU backend x precision against the fp64 reference")

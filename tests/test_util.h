@@ -16,6 +16,7 @@
 #include <doctest/doctest.h>
 
 #include "host/cl/cl_device.h"
+#include "host/core/error.h"
 #include "host/io/rays_io.h"
 #include "host/rays/raygen.h"
 #include "host/reference/check.h"
@@ -240,6 +241,20 @@ inline void CheckSimdEqualsScalar(const Scene& scene, int size)
       }
     }
   }
+}
+
+// Parsing `text` (as file "bad.nff") is bad input whose message holds `what`.
+inline void CheckNffError(const std::string& text, const char* what)
+{
+  Scene bad;
+  try {
+    ParseNFF(text, "bad.nff", bad);
+  } catch (const InputError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find(what) != std::string::npos);
+    return;
+  }
+  FAIL("no error for: ", text);
 }
 
 }  // namespace cr::test

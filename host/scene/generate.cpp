@@ -207,6 +207,14 @@ static Scene FieldBase(double half)
   return s;
 }
 
+// Rotation by ax about x, then by az about z (a shape tilted off its axis).
+static glm::dmat3 Tilt(double ax, double az)
+{
+  const glm::dmat3 rx(1, 0, 0, 0, std::cos(ax), std::sin(ax), 0, -std::sin(ax), std::cos(ax));
+  const glm::dmat3 rz(std::cos(az), std::sin(az), 0, -std::sin(az), std::cos(az), 0, 0, 0, 1);
+  return rz * rx;
+}
+
 // A uniform number in [lo, hi) from splitmix64 state.
 static double SplitMix(std::uint64_t& state, double lo, double hi)
 {
@@ -245,9 +253,7 @@ Scene GenerateQuadricField(std::uint64_t n)
       ext.z = fam == 3 ? 0.5 * h : 0.7;
       // random rotation about x then z
       const double ax = uni(-0.5, 0.5), az = uni(0.0, 2.0 * kPi);
-      const glm::dmat3 rx(1, 0, 0, 0, std::cos(ax), std::sin(ax), 0, -std::sin(ax), std::cos(ax));
-      const glm::dmat3 rz(std::cos(az), std::sin(az), 0, -std::sin(az), std::cos(az), 0, 0, 0, 1);
-      const glm::dmat3 R = rz * rx;
+      const glm::dmat3 R = Tilt(ax, az);
       const glm::dmat3 Q = R * glm::dmat3(m.x, 0, 0, 0, m.y, 0, 0, 0, m.z) * glm::transpose(R);
       const glm::dvec3 rb = R * b, qc = Q * c;
       const glm::dvec3 L = rb - 2.0 * qc;
@@ -311,9 +317,7 @@ Scene GeneratePolyhedronField(std::uint64_t n)
       const double scale = uni(0.9, 1.4);
       const glm::dvec3 c(-half + 2.0 * i + 1.0, -half + 2.0 * j + 1.0, 0.5 * scale);
       const double ax = uni(-0.6, 0.6), az = uni(0.0, 2.0 * kPi);
-      const glm::dmat3 rx(1, 0, 0, 0, std::cos(ax), std::sin(ax), 0, -std::sin(ax), std::cos(ax));
-      const glm::dmat3 rz(std::cos(az), std::sin(az), 0, -std::sin(az), std::cos(az), 0, 0, 0, 1);
-      const glm::dmat3 R = rz * rx;
+      const glm::dmat3 R = Tilt(ax, az);
       const auto faces = CrystalFaces(kind);
       std::vector<double> v = {double(faces.size())};
       for (const auto& [n0, h] : faces) {
