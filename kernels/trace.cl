@@ -58,7 +58,7 @@ typedef float4 camreal4;
 #else
 #define CR_ACCEL_TAKEN(U) (accel == CR_ACCEL_ID_##U)
 #endif
-#define CR_IF_WITH(U, ...) CR_CAT(CR_IF_, CR_WITH_##U)(__VA_ARGS__)
+#define CR_IF_WITH(U, code) CR_CAT(CR_IF_, CR_WITH_##U)(code)
 
 /* The scene and structure arguments of every kernel, in binding order
  * (host/cl/cl_tracer.cpp binds them by these positions): for each primitive
@@ -233,9 +233,9 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   __local uint *sLane, __local uint *sState, __local real *sRay, __local uint *sAxes, __local real *sHit, \
       __local uint *sHitG
 #define CR_PACKET_ARGS_COMMON sLane, sState, sRay, sAxes, sHit, sHitG
-#define CR_PACKET_LOCALS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_LOCALS_##U)
-#define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_PARAMS_##U)
-#define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_IF_WITH(U, CR_PACKET_ARGS_##U)
+#define CR_PACKET_LOCALS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U)
+#define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_PARAMS_##U)
+#define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_ARGS_##U)
 #define CR_PACKET_LOCALS CR_ACCEL_TYPES(CR_PACKET_LOCALS_) CR_PACKET_LOCALS_COMMON
 #define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_ACCEL_TYPES(CR_PACKET_PARAMS_)
 #define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_ACCEL_TYPES(CR_PACKET_ARGS_)

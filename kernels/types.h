@@ -128,12 +128,16 @@ typedef struct {
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
  * keeps the code only for a type the kernel is built for, so that the
- * generated dispatch compiles nothing of an absent type. */
+ * generated dispatch compiles nothing of an absent type. OpenCL C 1.2 has
+ * no variadic macros (NVIDIA's compiler rejects them), so `code` is one
+ * macro argument: any comma in it must sit inside parentheses; code whose
+ * commas come from a macro's expansion selects CR_IF_1/CR_IF_0 directly,
+ * CR_CAT(CR_IF_, flag)(MACRO), which expands MACRO last. */
 #define CR_CAT_(a, b) a##b
 #define CR_CAT(a, b) CR_CAT_(a, b)
-#define CR_IF_1(...) __VA_ARGS__
-#define CR_IF_0(...)
-#define CR_IF(U, ...) CR_CAT(CR_IF_, CR_HAS_##U)(__VA_ARGS__)
+#define CR_IF_1(code) code
+#define CR_IF_0(code)
+#define CR_IF(U, code) CR_CAT(CR_IF_, CR_HAS_##U)(code)
 
 /* Where each type's unified indices begin: type k holds [begin[k],
  * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives;
