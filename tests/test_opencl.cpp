@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -367,6 +368,36 @@ TEST_CASE("opencl: primary rays generated on the device equal the host's" * doct
     // the same rays, so the same answers bit for bit.
     if (fp64) CHECK(Compare(hits, ref, false).differ == 0);
   }
+}
+
+TEST_CASE("opencl: each trace reports its kernel's device time, within the wall time" * doctest::skip(NoOpenCL()))
+{
+  auto cache = TestCacheDir();
+  const Scene& scene = test::CachedScene(test::SpdPath("teapot"));
+  RayGenOptions g;
+  g.width = 64;
+  g.height = 48;
+  const auto rays = GenerateRays(scene, test::CachedReference(scene), g);
+  TraceConfig sc;
+  auto simd = CreateTracer(scene, sc);
+  std::vector<HitRecord> hits;
+  simd->Trace(rays, hits, false, nullptr);
+  CHECK(simd->LastKernelMs() < 0.0);  // no device clock: none reported
+  TraceConfig cfg;
+  cfg.backend = Backend::OpenCL;
+  auto tracer = CreateTracer(scene, cfg);
+  tracer->Prepare(false);
+  CHECK(tracer->LastKernelMs() < 0.0);  // the compile's empty launches are not traces
+  for (bool occlusion : {false, true}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    tracer->Trace(rays, hits, occlusion, nullptr);
+    const double wallMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    INFO("occlusion " << occlusion);
+    CHECK(tracer->LastKernelMs() > 0.0);
+    CHECK(tracer->LastKernelMs() <= wallMs);
+  }
+  tracer->TracePrimary(MakeCameraFrame(scene.camera, 64, 48), 64, 48, hits, nullptr);
+  CHECK(tracer->LastKernelMs() > 0.0);
 }
 
 TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))

@@ -16,6 +16,9 @@ namespace cr::bench {
 struct Timing {
   double medianMs = 0.0, minMs = 0.0, maxMs = 0.0;
   int repeat = 0;
+  // The kernels' device time (Tracer::LastKernelMs) of the same runs; a
+  // negative median where the backend reports none.
+  double kernelMedianMs = -1.0, kernelMinMs = -1.0, kernelMaxMs = -1.0;
 };
 
 struct PerRay {

@@ -44,20 +44,29 @@ Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlus
 {
   tracer.Prepare(occlusion);
   tracer.Trace(rays, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
-  std::vector<double> ms;
+  std::vector<double> ms, kernelMs;
   std::vector<HitRecord> scratch;
   for (int r = 0; r < repeat; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     tracer.Trace(rays, scratch, occlusion, nullptr);
     ms.push_back(MsSince(t0));
+    if (tracer.LastKernelMs() >= 0.0) kernelMs.push_back(tracer.LastKernelMs());
   }
-  std::sort(ms.begin(), ms.end());
+  const auto median = [](std::vector<double>& v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  };
   Timing t;
   t.repeat = repeat;
   if (!ms.empty()) {
-    t.medianMs = ms.size() % 2 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+    t.medianMs = median(ms);
     t.minMs = ms.front();
     t.maxMs = ms.back();
+  }
+  if (!kernelMs.empty() && kernelMs.size() == ms.size()) {
+    t.kernelMedianMs = median(kernelMs);
+    t.kernelMinMs = kernelMs.front();
+    t.kernelMaxMs = kernelMs.back();
   }
   return t;
 }

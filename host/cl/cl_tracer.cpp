@@ -127,6 +127,8 @@ class ClTracer final : public Tracer {
 
   std::string DeviceName() const override { return cl_.dev.name; }
 
+  double LastKernelMs() const override { return lastKernelMs_; }
+
   std::string VariantName() const override
   {
     return fmt::format("{} {}{} {}x{}", PrecisionName(config_.precision), ClVariantName(variant_),
@@ -263,7 +265,19 @@ class ClTracer final : public Tracer {
     if (ClFaultInjected(ClFault::Launch))
       ThrowClError(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel", __FILE__, __LINE__,
                    name + ClFaultNote(ClFault::Launch));
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, global, local), "clEnqueueNDRangeKernel", name);
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueNDRangeKernel(k, cl::NullRange, global, local, nullptr, &lastLaunch_),
+                     "clEnqueueNDRangeKernel", name);
+  }
+
+  // The last launch's device time (its event, complete once a blocking read
+  // after it returned); negative where the device does not report it.
+  double KernelMs(const cl::Event& e)
+  {
+    cl_ulong start = 0, end = 0;
+    if (e.getProfilingInfo(CL_PROFILING_COMMAND_START, &start) != CL_SUCCESS ||
+        e.getProfilingInfo(CL_PROFILING_COMMAND_END, &end) != CL_SUCCESS || end < start)
+      return -1.0;
+    return double(end - start) * 1e-6;
   }
 
   void BindScene(cl::Kernel& k, const char* name)
@@ -348,6 +362,7 @@ class ClTracer final : public Tracer {
   {
     CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(hitBuf_, CL_TRUE, 0, n * sizeof(HitRecord), hits.data()),
                      "clEnqueueReadBuffer", "hits");
+    lastKernelMs_ = KernelMs(lastLaunch_);
     if (config_.stats && stats) {
       std::vector<std::uint32_t> per(4 * n);
       CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(statsBuf_, CL_TRUE, 0, n * kStatsBytes, per.data()),
@@ -372,6 +387,8 @@ class ClTracer final : public Tracer {
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
   cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_;
+  cl::Event lastLaunch_;
+  double lastKernelMs_ = -1.0;
   cl::Buffer accel_[3 * CR_NUM_ACCEL_TYPES];  // per structure: header, nodes, references
   cl::Buffer rayBuf_, hitBuf_, statsBuf_;
   std::size_t rayCapacity_ = 0, hitCapacity_ = 0;

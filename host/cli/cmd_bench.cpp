@@ -73,6 +73,8 @@ void PrintRow(const bench::Row& r, std::size_t index, std::size_t total, Clock::
   else
     what = fmt::format("{:8.2f} Mrays/s  build {:8.1f} ms  wrong {}", r.timing.medianMs > 0.0 ? double(r.rays) / (r.timing.medianMs * 1e3) : 0.0,
                        r.structure.buildMs, r.error ? r.error->wrong : 0);
+  if (r.note.empty() && r.timing.kernelMedianMs > 0.0)
+    what += fmt::format("  kernel {:.2f} Mrays/s", double(r.rays) / (r.timing.kernelMedianMs * 1e3));
   fmt::print(stderr, "[{:4}/{}] {:>6.0f} s  {:<14} {:<8} {:<24} {}\n", index, total, SecondsSince(t0), r.scene,
              RayKindName(r.kind), r.combo.Label(), what);
 }

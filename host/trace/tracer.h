@@ -87,6 +87,10 @@ class Tracer {
   // tracer has fallen back (FallbackReason then says why, in one line).
   virtual Backend ActiveBackend() const { return backend_; }
   virtual std::string FallbackReason() const { return {}; }
+  // Device time of the last Trace or TracePrimary call's kernel in ms, from
+  // the device's own clock (OpenCL event profiling): the wall time less the
+  // transfers and the host's share. Negative for backends without one.
+  virtual double LastKernelMs() const { return -1.0; }
 
  protected:
   AccelInfo info_;
