@@ -34,6 +34,7 @@ typedef struct {
 #include "box.h"
 #include "quadric.h"
 #include "polyhedron.h"
+#include "sdf.h"
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
  * robust mode: an exact float tie between two different spheres goes to the

@@ -63,6 +63,7 @@ typedef std::uint64_t cr_u64;
 using std::copysign;
 using std::fabs;
 using std::floor;
+using std::rint;
 using std::fmax;
 using std::fmin;
 using std::sqrt;

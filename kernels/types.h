@@ -107,6 +107,43 @@ typedef struct {
   float plane[CR_POLY_MAX_PLANES][4];
 } Polyhedron;
 
+/* SDF block (NFF extension `sdf` ... `sdf end`, kernels/sdf.h): a distance
+ * program of `count` operations in postfix order, at most CR_SDF_MAX_OPS,
+ * its coordinates about the float centre; leaves push a distance, the
+ * combining operations pop two and push one, CR_SDF_REPEAT and
+ * CR_SDF_END_REPEAT bracket a domain repetition (host/prims/sdf.cpp checks
+ * that no stack exceeds CR_SDF_MAX_STACK). lo, hi: the bound (absolute);
+ * eps: the hit threshold; steps: the step budget; relax: the relaxation
+ * factor in [1, 2). 64 + 32 CR_SDF_MAX_OPS bytes. */
+#define CR_SDF_MAX_OPS 24
+#define CR_SDF_MAX_STACK 8
+#define CR_SDF_SPHERE 1u
+#define CR_SDF_BOX 2u
+#define CR_SDF_TORUS 3u
+#define CR_SDF_CAPSULE 4u
+#define CR_SDF_CYLINDER 5u
+#define CR_SDF_UNION 6u
+#define CR_SDF_INTERSECTION 7u
+#define CR_SDF_DIFFERENCE 8u
+#define CR_SDF_SMOOTH_UNION 9u
+#define CR_SDF_REPEAT 10u
+#define CR_SDF_END_REPEAT 11u
+typedef struct {
+  uint op;
+  float a[7];
+} SdfOp;
+typedef struct {
+  float center[3];
+  uint count;
+  float lo[3];
+  float eps;
+  float hi[3];
+  uint steps;
+  float relax;
+  uint pad[3];
+  SdfOp op[CR_SDF_MAX_OPS];
+} Sdf;
+
 /* The primitive types, one entry each, in unified-index order:
  * X(Type, UPPER, array): the layout `Type` (below), its index constant
  * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
@@ -116,14 +153,15 @@ typedef struct {
  * list (kernels/intersect.h, packet.cl). */
 #define CR_PRIM_TYPES(X) \
   X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes) \
-      X(Quadric, QUADRIC, quadrics) X(Polyhedron, POLYHEDRON, polyhedra)
+      X(Quadric, QUADRIC, quadrics) X(Polyhedron, POLYHEDRON, polyhedra) X(Sdf, SDF, sdfs)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
 #define CR_PRIM_BOX 3u
 #define CR_PRIM_QUADRIC 4u
 #define CR_PRIM_POLYHEDRON 5u
-#define CR_NUM_PRIM_TYPES 6u
+#define CR_PRIM_SDF 6u
+#define CR_NUM_PRIM_TYPES 7u
 /* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
@@ -255,6 +293,7 @@ static_assert(sizeof(Cone) == 32 && offsetof(Cone, apex) == 16);
 static_assert(sizeof(Box) == 32 && offsetof(Box, hi) == 16);
 static_assert(sizeof(Quadric) == 64 && offsetof(Quadric, extent) == 16 && offsetof(Quadric, q) == 28);
 static_assert(sizeof(Polyhedron) == 48 + 16 * CR_POLY_MAX_PLANES && offsetof(Polyhedron, plane) == 48);
+static_assert(sizeof(Sdf) == 64 + 32 * CR_SDF_MAX_OPS && offsetof(Sdf, op) == 64);
 static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);

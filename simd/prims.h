@@ -26,3 +26,4 @@ struct SimdTest;
 #include "simd/box.h"
 #include "simd/quadric.h"
 #include "simd/polyhedron.h"
+#include "simd/sdf.h"

@@ -36,9 +36,10 @@ std::optional<SceneRef> GeneratedRef(const std::string& name)
   auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
   if (ec != std::errc() || p != num.data() + num.size())
     throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics" && kind != "polyhedra")
+  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics" && kind != "polyhedra" &&
+      kind != "sdf")
     throw InputError(
-        fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium, quadrics and polyhedra", name));
+        fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium, quadrics, polyhedra and sdf", name));
   return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
 }
 
@@ -125,7 +126,7 @@ std::vector<SceneRef> ResolveScenes(const std::vector<std::string>& names, std::
       }
     if (!found)
       throw InputError(fmt::format("unknown scene '{}': not a file, not an SPD scene (scenes/spd/{}.nff), not a mesh "
-                                   "(../shared/scenes/meshes/{}.obj), not gen:sphereflake|bumpy|stadium|quadrics|polyhedra:N",
+                                   "(../shared/scenes/meshes/{}.obj), not gen:sphereflake|bumpy|stadium|quadrics|polyhedra|sdf:N",
                                    n, n, n));
   }
   return out;
@@ -141,6 +142,7 @@ Scene LoadBenchScene(const SceneRef& ref)
   if (kind == "bumpy") return GenerateBumpySphere(n);
   if (kind == "quadrics") return GenerateQuadricField(n);
   if (kind == "polyhedra") return GeneratePolyhedronField(n);
+  if (kind == "sdf") return GenerateSdfField(n);
   return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
 }
 

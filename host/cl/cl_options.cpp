@@ -76,6 +76,14 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
       else if (t != "scene")
         throw InputError(fmt::format("CELLRAY_CL_TYPES='{}': expected scene or all", t));
     }
+    // An SDF program holds only the distance operations its blocks use
+    // (kernels/sdf.h CR_SDF_OPS); with every type compiled in, all of them.
+    if ((s.types >> CR_PRIM_SDF) & 1u) {
+      std::uint32_t ops = 0;
+      for (const Sdf& b : scene.sdfs)
+        for (std::uint32_t k = 0; k < b.count; ++k) ops |= 1u << b.op[k].op;
+      if (!scene.sdfs.empty()) s.defines.push_back(fmt::format("CR_SDF_OPS={:#x}u", ops));
+    }
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
   // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was up to

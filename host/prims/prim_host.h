@@ -78,6 +78,17 @@ struct LocalSurface {
 CR_PRIM_TYPES(CR_PRIM_HOST_DECLS_)
 #undef CR_PRIM_HOST_DECLS_
 
+// HitSlack: how far from its surface a hit on the type may lie by the
+// type's own definition, beyond check's tolerance (docs/TOLERANCE.md): an
+// SDF block's hit threshold (its hits are where the distance falls below
+// eps); 0 for the exact types.
+template <class T>
+double HitSlack(const T&)
+{
+  return 0.0;
+}
+double HitSlack(const Sdf& s);
+
 // a and b's common part (empty when they are disjoint).
 inline Bounds Intersect(const Bounds& a, const Bounds& b)
 {

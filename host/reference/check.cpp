@@ -19,6 +19,22 @@ namespace {
 // the scene or the primitive.
 double Delta(const DRay& r, double t) { return CheckDelta(MaxAbs(r.o), MaxAbs(r.d), t); }
 
+// The slack of primitive `prim` (HitSlack, host/prims/prim_host.h): 0 but
+// for an SDF block, whose hits lie within its eps of the surface by
+// definition. Added to the tolerance wherever a hit on `prim` is judged.
+double Slack(const ReferenceTracer& tr, std::uint32_t prim)
+{
+  const Scene& scene = tr.GetScene();
+  const PrimRanges ranges = scene.Ranges();
+  if (Prim_Count(&ranges, CR_PRIM_SDF) == 0) return 0.0;
+  std::vector<std::uint32_t> pieces;
+  tr.PiecesOf(prim, pieces);
+  double s = 0.0;
+  for (std::uint32_t g : pieces)
+    scene.Visit(ranges, g, [&](const auto& piece, std::uint32_t) { s = std::max(s, HitSlack(piece)); });
+  return s;
+}
+
 // Does the ray meet primitive `prim` (any piece) in [tmin, tmax]?
 bool MeetsPrim(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, std::vector<std::uint32_t>& pieces)
 {
@@ -84,7 +100,8 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
   const Scene& scene = tr.GetScene();
   const PrimRanges ranges = scene.Ranges();
   const double dl = glm::length(r.d);
-  auto delta = [&](double t) { return Delta(r, t); };
+  const double primSlack = Slack(tr, prim);
+  auto delta = [&](double t) { return Delta(r, t) + primSlack; };
   std::vector<std::uint32_t> pieces;
   tr.PiecesOf(prim, pieces);
   for (std::uint32_t g : pieces) {
@@ -122,7 +139,8 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   auto missVerdict = [&]() {
     tr.AllHits(r, all);
     for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t))) return Verdict::WrongMissed;
+      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t) + Slack(tr, scene.IdOfUnified(h.g))))
+        return Verdict::WrongMissed;
     return Verdict::Flip;
   };
 
@@ -134,7 +152,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
       // Scale delta by where the primitive is along the ray (NearRay scales
       // it point by point).
       double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
-      const bool near = PossiblyMeets(tr, hit.prim, r, Delta(r, far)) || NearRay(tr, hit.prim, r);
+      const bool near = PossiblyMeets(tr, hit.prim, r, Delta(r, far) + Slack(tr, hit.prim)) || NearRay(tr, hit.prim, r);
       if (!near) return Verdict::WrongNotOnPrim;
       // Occluded is the right answer when the reference finds an occluder
       // too (the named one is off by less than delta: a tie); when it finds
@@ -148,7 +166,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   RefHit ref = tr.Intersect(r);
   if (!testHit) return ref.Found() ? missVerdict() : Verdict::Agree;
   const double t = hit.t;
-  const double delta = Delta(r, t);
+  const double delta = Delta(r, t) + Slack(tr, hit.prim);
   if (ref.Found() && scene.IdOfUnified(ref.g) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
     *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
     return Verdict::Agree;
@@ -164,8 +182,9 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   tr.AllHits(r, all);
   for (const RefHit& h : all) {
     const std::uint32_t hp = scene.IdOfUnified(h.g);
-    if ((t - h.t) * dl <= std::max(delta, Delta(r, h.t))) continue;
-    if (!Marginal(tr, hp, r, h.t, Delta(r, h.t))) return Verdict::WrongFarther;
+    const double deltaH = Delta(r, h.t) + Slack(tr, hp);
+    if ((t - h.t) * dl <= std::max(delta, deltaH)) continue;
+    if (!Marginal(tr, hp, r, h.t, deltaH)) return Verdict::WrongFarther;
   }
   return Verdict::Tie;
 }

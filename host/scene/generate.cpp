@@ -330,4 +330,35 @@ Scene GeneratePolyhedronField(std::uint64_t n)
   return s;
 }
 
+Scene GenerateSdfField(std::uint64_t n)
+{
+  if (n < 1 || n > (std::uint64_t(1) << 24))
+    throw InputError(fmt::format("SDF field of {} blocks: expected 1 .. 2^24", n));
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+  const double half = side;  // cells 2 units across
+  Scene s = FieldBase(half);
+  std::uint64_t state = 0x2545F4914F6CDD1Dull;
+  auto uni = [&](double lo, double hi) { return SplitMix(state, lo, hi); };
+  std::string text = "f 0.8 0.45 0.3 0.7 0.3 30 0 1\n";
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const double x = -half + 2.0 * i + 1.0, y = -half + 2.0 * j + 1.0;
+      const double r = uni(0.3, 0.45), r2 = uni(0.2, 0.35);
+      text += fmt::format("sdf {} {} 0 {} {} 1.6 0.001 256 1.5\n", x - 0.95, y - 0.95, x + 0.95, y + 0.95);
+      text += fmt::format("sphere {} {} {} {}\n", x + uni(-0.3, 0.3), y + uni(-0.3, 0.3), r, r);
+      text += fmt::format("sphere {} {} {} {}\nsmooth 0.25\n", x + uni(-0.3, 0.3), y + uni(-0.3, 0.3),
+                          r + uni(0.3, 0.6), r2);
+      switch (int(uni(0.0, 3.0))) {
+        case 0: text += fmt::format("torus {} {} 0.6 0.45 0.08\nunion\n", x, y); break;
+        case 1:
+          text += fmt::format("capsule {} {} 0.2 {} {} 0.9 0.1\nunion\n", x - 0.6, y, x + 0.6, y + uni(-0.3, 0.3));
+          break;
+        default: text += fmt::format("roundbox {} {} 0.12 0.6 0.6 0.12 0.05\nunion\n", x, y); break;
+      }
+      text += "sdf end\n";
+    }
+  ParseNFF(text, s.path, s);
+  return s;
+}
+
 }  // namespace cr

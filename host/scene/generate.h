@@ -36,6 +36,12 @@ Scene GenerateQuadricField(std::uint64_t n);
 // quadric field.
 Scene GeneratePolyhedronField(std::uint64_t n);
 
+// A field of about n SDF blocks (NFF extension `sdf`), one per cell: two
+// balls joined by a smooth union, with a standing torus, a tilted capsule or
+// a rounded slab added (seeded), marched with eps 0.001, 256 steps and
+// relaxation 1.5, as the quadric field.
+Scene GenerateSdfField(std::uint64_t n);
+
 // Writes a generated scene (spheres and triangles) as NFF.
 void WriteNFF(const Scene& scene, const std::string& path);
 

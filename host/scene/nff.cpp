@@ -145,7 +145,17 @@ class LexerStatement final : public NffStatement {
   }
   double Number(const char* what) override { return lx_.Number(stmt_.c_str(), line, what); }
   long Integer(const char* what) override { return lx_.Integer(stmt_.c_str(), line, what); }
+  std::string Word(const char* what) override
+  {
+    auto tok = lx_.Next();
+    if (!tok)
+      lx_.Fail(lx_.EofLine(), fmt::format("truncated '{}' block (started on line {}): end of file where {} was expected",
+                                          stmt_, line, what));
+    return std::string(tok->text);
+  }
+  long TokenLine() const override { return lx_.EofLine(); }
   [[noreturn]] void Fail(const std::string& what) override { lx_.Fail(line, what); }
+  [[noreturn]] void FailAt(long at, const std::string& what) override { lx_.Fail(at, what); }
 
  private:
   Lexer& lx_;

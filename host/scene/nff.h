@@ -37,7 +37,12 @@ class NffStatement {
     const double x = Number(what), y = Number(what), z = Number(what);
     return {x, y, z};
   }
+  // The next word of the statement (a block's operation names, kernels'
+  // sdf.h), and the line of the last token read (where a block's error is).
+  virtual std::string Word(const char* what) = 0;
+  virtual long TokenLine() const { return line; }
   [[noreturn]] virtual void Fail(const std::string& what) = 0;
+  [[noreturn]] virtual void FailAt(long at, const std::string& what) = 0;
   // A PrimInfo for a one-piece statement of type k at this line.
   PrimInfo Info(std::uint32_t k) const
   {
@@ -64,7 +69,9 @@ class NffValues final : public NffStatement {
     return values_[next_++];
   }
   long Integer(const char* what) override { return static_cast<long>(Number(what)); }
+  std::string Word(const char* what) override { Fail(std::string("a generated statement has no word for ") + what); }
   [[noreturn]] void Fail(const std::string& what) override;
+  [[noreturn]] void FailAt(long, const std::string& what) override { Fail(what); }
 
  private:
   std::vector<double> values_;

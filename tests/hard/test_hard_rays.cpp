@@ -98,3 +98,8 @@ TEST_CASE("hard: huge primitives seen from nearby (ground spheres, triangles 1e6
   for (const HardCaseResult& r : results)
     if (r.precision == Precision::Fast && r.caseName == "huge/ground-sphere-1e6") CHECK(r.wrong > r.rays / 2);
 }
+
+TEST_CASE("hard: SDF blocks, grazing rays, rays leaving their surface, blocks 1e6 away, thin features")
+{
+  hard_test::RunAndCheck("sdf/");
+}

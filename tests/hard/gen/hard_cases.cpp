@@ -38,6 +38,7 @@ const std::vector<CaseSpec>& CaseSpecs()
     AddGrazingCases(s);
     AddSelfCases(s);
     AddHugeCases(s);
+    AddSdfCases(s);
     AddDegenerateCases(s);
     AddExtremeCases(s);
     return s;

@@ -31,6 +31,7 @@ void AddSelfCases(std::vector<CaseSpec>& specs);
 void AddDegenerateCases(std::vector<CaseSpec>& specs);
 void AddExtremeCases(std::vector<CaseSpec>& specs);
 void AddHugeCases(std::vector<CaseSpec>& specs);
+void AddSdfCases(std::vector<CaseSpec>& specs);
 
 // SplitMix64 (Steele, Lea & Flood 2014): the same numbers from a seed on any
 // standard library, unlike std::uniform_real_distribution.
