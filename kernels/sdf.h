@@ -13,16 +13,18 @@
  * with w = 1. It hits where f < eps; it misses when it leaves the bound or
  * [tmin, tmax], or when the step budget runs out. A ray that starts (at
  * tmin, inside the bound) within eps of the surface first leaves that
- * shell (steps of eps along the ray),
+ * shell (steps of eps along the ray, at most CR_SDF_SHELL_STEPS, not
+ * counted in the budget),
  * so that a shadow ray from a hit point does not find the surface it starts
  * on; the side it then finds itself on (outside or inside the solid) is the
  * side it marches from.
  *
  * Precision modes: `fast` reports the first t where f < eps; `robust` and
  * `fp64` (in double) refine it with up to CR_SDF_REFINE plain steps
- * t += f / |d| (each moves to the surface along the ray for an exact
- * distance away from grazing), so that the reported t lies well within eps
- * of the surface. The SIMD backend runs Sdf_March lane by lane.
+ * t += f / |d|, each kept only if it brings the point nearer the surface
+ * (onto it for a hit away from grazing; to the closest approach for a ray
+ * that passes within eps), so that the reported t lies well within eps of
+ * the surface. The SIMD backend runs Sdf_March lane by lane.
  *
  * Only what a scene uses: CR_SDF_OPS, a mask of (1 << op), keeps the code
  * of the operations the scene's blocks contain (default: all). */
@@ -40,6 +42,10 @@
 #ifndef CR_SDF_REFINE
 #define CR_SDF_REFINE 8
 #endif
+/* Steps of eps to leave the shell a ray starts in, apart from the budget
+ * (a ray leaving the surface at a grazing angle needs about 1 / cos of
+ * them); a ray still in the shell after them misses. */
+#define CR_SDF_SHELL_STEPS 4096u
 
 CR_FUNC real Sdf_Len3(real x, real y, real z) { return sqrt(x * x + y * y + z * z); }
 CR_FUNC real Sdf_Len2(real x, real y) { return sqrt(x * x + y * y); }
@@ -162,8 +168,8 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
   CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
   real f = Sdf_Eval(s, p);
   if (t0 <= tmin) {
-    while (fabs(f) < eps && n < s->steps) {
-      ++n;
+    for (uint m = 0u; fabs(f) < eps; ++m) {
+      if (m == CR_SDF_SHELL_STEPS) return 0;
       t += eps * inv;
       if (t > t1) return 0;
       CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
@@ -192,11 +198,18 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
       continue;
     }
     if (r < eps * inv) {
-      for (int k = 0; k < refine; ++k) {
-        CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
-        const real rk = side * Sdf_Eval(s, p) * inv;
-        if (rk == (real)0.0f) break;
-        t += rk;
+      /* Plain steps while they bring the point nearer the surface: onto it
+       * for a hit, to the closest approach for a ray that passes within
+       * eps (never farther from the surface than where the march stopped). */
+      real step = r, best = fabs(r);
+      for (int k = 0; k < refine && step != (real)0.0f; ++k) {
+        const real tn = t + step;
+        CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + tn * dir[i];
+        const real rn = side * Sdf_Eval(s, p) * inv;
+        if (!(fabs(rn) < best)) break;
+        t = tn;
+        best = fabs(rn);
+        step = rn;
       }
       if (!(t >= t0 && t <= t1)) return 0;
       *tHit = t;

@@ -78,7 +78,8 @@ bool RefMarch(const Sdf& s, const ref::DRay& r, double& tHit, std::vector<double
   double f = Eval(s, r.o + t * r.d);
   // As the kernels: a ray starting in the bound leaves the eps shell first.
   if (t0 <= r.tmin) {
-    for (int n = 0; std::fabs(f) < shell && n < (1 << 20); ++n) {
+    for (std::uint32_t m = 0; std::fabs(f) < shell; ++m) {
+      if (m == CR_SDF_SHELL_STEPS) return false;
       t += shell / len;
       if (t > t1) return false;
       f = Eval(s, r.o + t * r.d);
