@@ -5,7 +5,8 @@ Keinert et al. 2014). For each scene and each (eps, w), every `sdf` line's
 eps and w are replaced (the step budget kept) and `cellray bench` traces
 primary and diffuse rays with the SIMD BVH in fast and robust precision;
 the table gives Mrays/s, the largest relative t error of the agreeing hits
-against the fp64 reference, and the flips and wrong answers. Prints
+against the fp64 reference, the flips and wrong answers, and the distance
+evaluations per march (`trace --stats` on the same rays). Prints
 Markdown; docs/BENCHMARKS.md holds its output and the command.
 
   bench/sdf_study.py [--eps 0.01,0.001,0.0001] [--relax 1,1.3,1.6,1.9]
@@ -98,11 +99,18 @@ def main():
                         if r["backend"] != "simd":
                             continue
                         e = r["error"]
+                        # March steps: `trace --stats` replays the marches
+                        # of the same rays (host/prims/sdf_steps.h).
+                        raysFile = [x for x in os.listdir(os.path.join(d, "rays"))
+                                    if x.endswith(".rays") and f"-{r['kind']}-" in x][0]
+                        st = run([a.bin, "trace", path, "--rays", os.path.join(d, "rays", raysFile), "--backend",
+                                  "simd", "--precision", r["precision"], "--stats", "--threads", str(a.threads)])
                         rows.append((name, r["kind"], r["precision"], eps, relax, r["mrays_per_s"]["median"],
-                                     e["max_rel_t_err"], e["flips"], e["wrong"]))
+                                     e["max_rel_t_err"], e["flips"], e["wrong"], st["sdf"]["steps_per_march"]))
     print(f"cellray {commit()}: `bench/sdf_study.py --rays {a.rays} --repeat {a.repeat} --threads {a.threads}`; "
           "SIMD BVH (the variant `auto` picks), one row per scene x ray kind x precision x eps; Mrays/s / max "
-          "relative t error of the agreeing hits / flips + wrong, per relaxation factor w.\n")
+          "relative t error of the agreeing hits / flips + wrong / distance evaluations per march, per "
+          "relaxation factor w.\n")
     relaxes = a.relax.split(",")
     print("| scene | rays | precision | eps | " + " | ".join(f"w = {w}" for w in relaxes) + " |")
     print("|---|---|---|---|" + "---|" * len(relaxes))
@@ -115,7 +123,7 @@ def main():
         cells = []
         for w in relaxes:
             m = [r for r in rows if r[:4] == k and r[4] == w]
-            cells.append("–" if not m else f"{m[0][5]:.2f} / {m[0][6]:.1e} / {m[0][7]}+{m[0][8]}")
+            cells.append("–" if not m else f"{m[0][5]:.2f} / {m[0][6]:.1e} / {m[0][7]}+{m[0][8]} / {m[0][9]:.1f}")
         print(f"| {k[0]} | {k[1]} | {k[2]} | {k[3]} | " + " | ".join(cells) + " |")
 
 

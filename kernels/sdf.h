@@ -141,10 +141,17 @@ CR_FUNC real Sdf_Eval(const Sdf* s, const real x[3])
 #define CR_SDF_CALL
 #endif
 
+CR_FUNC real Sdf_EvalCounted(const Sdf* s, const real x[3], uint* evals)
+{
+  *evals += 1u;
+  return Sdf_Eval(s, x);
+}
+
 /* Sphere tracing in `real`, the hit refined by up to `refine` plain steps
- * (fast: 0; robust and fp64: CR_SDF_REFINE). */
-CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sdf* s, real tmin, real tmax, int refine,
-                      real* tHit)
+ * (fast: 0; robust and fp64: CR_SDF_REFINE); *evals counts the distance
+ * evaluations (host/prims/sdf_steps.cpp reports them per ray). */
+CR_SDF_CALL CR_FUNC int Sdf_MarchCounted(const real org[3], const real dir[3], const Sdf* s, real tmin, real tmax,
+                                         int refine, real* tHit, uint* evals)
 {
   /* The bound's slabs (fmin/fmax pass over the NaN of a ray in a face). */
   real t0 = tmin, t1 = tmax;
@@ -166,14 +173,14 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
   /* A ray that starts inside the bound first leaves the eps shell it may
    * start in (one that enters the bound from outside marches from there). */
   CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
-  real f = Sdf_Eval(s, p);
+  real f = Sdf_EvalCounted(s, p, evals);
   if (t0 <= tmin) {
     for (uint m = 0u; fabs(f) < eps; ++m) {
       if (m == CR_SDF_SHELL_STEPS) return 0;
       t += eps * inv;
       if (t > t1) return 0;
       CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
-      f = Sdf_Eval(s, p);
+      f = Sdf_EvalCounted(s, p, evals);
     }
   }
   const real side = f < (real)0.0f ? (real)-1.0f : (real)1.0f;
@@ -190,7 +197,7 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
       return 0;
     }
     CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + t * dir[i];
-    const real r = side * Sdf_Eval(s, p) * inv; /* distance along the ray */
+    const real r = side * Sdf_EvalCounted(s, p, evals) * inv; /* distance along the ray */
     if (w > (real)1.0f && t > tPrev && fabs(r) + rPrev < t - tPrev) {
       /* the relaxed step may have passed the surface: back to the safe one */
       t = tPrev + rPrev;
@@ -205,7 +212,7 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
       for (int k = 0; k < refine && step != (real)0.0f; ++k) {
         const real tn = t + step;
         CR_UNROLL for (int i = 0; i < 3; ++i) p[i] = x[i] + tn * dir[i];
-        const real rn = side * Sdf_Eval(s, p) * inv;
+        const real rn = side * Sdf_EvalCounted(s, p, evals) * inv;
         if (!(fabs(rn) < best)) break;
         t = tn;
         best = fabs(rn);
@@ -220,6 +227,14 @@ CR_SDF_CALL CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sd
     t += w * r;
   }
   return 0;
+}
+
+/* The march without its count. */
+CR_FUNC int Sdf_March(const real org[3], const real dir[3], const Sdf* s, real tmin, real tmax, int refine,
+                                  real* tHit)
+{
+  uint evals = 0u;
+  return Sdf_MarchCounted(org, dir, s, tmin, tmax, refine, tHit, &evals);
 }
 
 CR_FUNC int Sdf_Test(const Ray* r, const Sdf* s, real tmin, real tmax, real* tHit, real* u, real* v)

@@ -9,6 +9,7 @@
 
 #include "host/core/error.h"
 #include "host/prims/prim_host.h"
+#include "host/prims/sdf_steps.h"
 #include "tests/test_util.h"
 
 using namespace cr;
@@ -161,6 +162,20 @@ TEST_CASE("sdf: a ball's hits lie on the sphere, rays from its surface do not fi
       CreateTracer(s, cfg)->Trace(out, oh, true, nullptr);
       CHECK(oh[0].prim == CR_NO_HIT);
     }
+  }
+  // The march replay of `trace --stats`: every ray enters the ball's bound
+  // once, a few evaluations each, more in robust mode (its refinement).
+  {
+    TraceConfig cfg;
+    std::vector<HitRecord> hits;
+    CreateTracer(s, cfg)->Trace(rays, hits, false, nullptr);
+    const SdfMarchCount robust = CountSdfMarches(s, rays, hits, false, false);
+    const SdfMarchCount fast = CountSdfMarches(s, rays, hits, false, true);
+    CHECK(robust.rays == rays.size());
+    CHECK(robust.marches == rays.size());
+    CHECK(fast.evals >= 3 * fast.marches);
+    CHECK(robust.evals > fast.evals);
+    CHECK(robust.evals < 64 * robust.marches);
   }
   // A budget of 2 steps cannot reach the ball from 3 away: a miss, and the
   // reference (which marches to convergence) is not fooled by it.

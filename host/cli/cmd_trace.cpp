@@ -10,6 +10,7 @@
 #include <tbb/info.h>
 
 #include "host/cli/commands.h"
+#include "host/prims/sdf_steps.h"
 #include "host/core/error.h"
 #include "host/io/rays_io.h"
 #include "host/rays/raygen.h"
@@ -162,6 +163,24 @@ Run RegisterTrace(CLI::App& app)
                       {"leaves_visited", double(stats.nLeaves) / n},
                       {"empty_leaves_visited", double(stats.nEmptyLeaves) / n}};
       j["structure"] = tracer->Info();
+      if (!scene.sdfs.empty()) {
+        // SDF blocks: their marches replayed on the host (the kernels
+        // count no march steps).
+        std::vector<RayRecord> traced = rays;
+        if (!o->primary.empty()) {
+          CameraFrame f = frame;
+          f.width = width;
+          f.height = height;
+          traced.resize(nRays);
+          for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) traced[std::size_t(y) * std::size_t(width) + std::size_t(x)] = PrimaryRay(f, x, y);
+        }
+        const SdfMarchCount m =
+            CountSdfMarches(scene, traced, hits, o->occlusion, cfg.precision == Precision::Fast);
+        j["sdf"] = {{"marches_per_ray", double(m.marches) / n},
+                    {"steps_per_ray", double(m.evals) / n},
+                    {"steps_per_march", m.marches ? double(m.evals) / double(m.marches) : 0.0}};
+      }
     }
     std::cout << j.dump() << std::endl;
     return 0;
