@@ -51,13 +51,7 @@ bool Inside(const Box& b, const glm::dvec3& p)
 
 const char* PrimTypeName(PrimTag<Box>) { return "box"; }
 
-Bounds FloatBounds(const Box& b)
-{
-  Bounds out;
-  out.lo = glm::vec3(b.lo[0], b.lo[1], b.lo[2]);
-  out.hi = glm::vec3(b.hi[0], b.hi[1], b.hi[2]);
-  return out;
-}
+Bounds FloatBounds(const Box& b) { return StoredBounds(b); }
 
 // Its box's two sides (the box itself is not cut).
 void SplitBounds(const Box& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
@@ -93,11 +87,7 @@ LocalSurface SurfaceAt(const Scene&, const Box& b, std::uint32_t, const glm::dve
   return ls;
 }
 
-void RefBounds(const Box& b, glm::dvec3& lo, glm::dvec3& hi)
-{
-  lo = D3(b.lo);
-  hi = D3(b.hi);
-}
+void RefBounds(const Box& b, glm::dvec3& lo, glm::dvec3& hi) { StoredRefBounds(b, lo, hi); }
 
 // The slab test of kernels/box.h in double: entry and exit, both roots.
 int RefRoots(const ref::DRay& r, const Box& b, double t[2], double*, double*)
@@ -131,11 +121,7 @@ glm::dvec3 RefNormal(const Box& b, const glm::dvec3& x)
   return n;
 }
 
-void RefBall(const Box& b, glm::dvec3& mid, double& reach)
-{
-  const glm::dvec3 pts[2] = {D3(b.lo), D3(b.hi)};
-  ref::BallOf(pts, 2, 0.0, mid, reach);
-}
+void RefBall(const Box& b, glm::dvec3& mid, double& reach) { StoredRefBall(b, mid, reach); }
 
 // The closest approaches to the twelve edges.
 void RefNearTimes(const Box& b, const ref::DRay& r, double t0, double t1, std::vector<double>& ts)

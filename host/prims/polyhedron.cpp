@@ -89,15 +89,7 @@ std::vector<Plane> StoredPlanes(const Polyhedron& p)
 
 const char* PrimTypeName(PrimTag<Polyhedron>) { return "polyhedron"; }
 
-Bounds FloatBounds(const Polyhedron& p)
-{
-  Bounds b;
-  for (int i = 0; i < 3; ++i) {
-    b.lo[i] = p.lo[i];
-    b.hi[i] = p.hi[i];
-  }
-  return b;
-}
+Bounds FloatBounds(const Polyhedron& p) { return StoredBounds(p); }
 
 void SplitBounds(const Polyhedron& p, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
 {
@@ -110,8 +102,7 @@ void SplitBounds(const Polyhedron& p, const Bounds& box, int axis, float pos, Bo
 // (beyond an edge) counts as met.
 bool OverlapsBox(const Polyhedron& p, const glm::dvec3& lo, const glm::dvec3& hi)
 {
-  for (int a = 0; a < 3; ++a)
-    if (lo[a] > double(p.hi[a]) || hi[a] < double(p.lo[a])) return false;
+  if (!StoredBoundsMeet(p, lo, hi)) return false;
   const glm::dvec3 c = Center(p);
   bool interior = true;
   for (std::uint32_t k = 0; k < p.count; ++k) {
@@ -145,11 +136,7 @@ LocalSurface SurfaceAt(const Scene&, const Polyhedron& p, std::uint32_t, const g
   return ls;
 }
 
-void RefBounds(const Polyhedron& p, glm::dvec3& lo, glm::dvec3& hi)
-{
-  lo = D3(p.lo);
-  hi = D3(p.hi);
-}
+void RefBounds(const Polyhedron& p, glm::dvec3& lo, glm::dvec3& hi) { StoredRefBounds(p, lo, hi); }
 
 // The slab clipping of kernels/polyhedron.h in long double (o - c and the
 // products of two floats exact there): entry and exit, both roots.
@@ -196,11 +183,7 @@ glm::dvec3 RefNormal(const Polyhedron& p, const glm::dvec3& x)
   return glm::normalize(Normal(p, OuterPlane(p, x - Center(p))));
 }
 
-void RefBall(const Polyhedron& p, glm::dvec3& mid, double& reach)
-{
-  const glm::dvec3 pts[2] = {D3(p.lo), D3(p.hi)};
-  ref::BallOf(pts, 2, 0.0, mid, reach);
-}
+void RefBall(const Polyhedron& p, glm::dvec3& mid, double& reach) { StoredRefBall(p, mid, reach); }
 
 // Where the ray crosses each face's plane: its closest approaches to the
 // edges and vertices lie among them.

@@ -89,6 +89,37 @@ double HitSlack(const T&)
 }
 double HitSlack(const Sdf& s);
 
+// The types whose record holds its float box as lo[3], hi[3] (box,
+// polyhedron, SDF block) share these: that box as Bounds and in double, the
+// ball around it, and whether a cell meets it.
+template <class T>
+Bounds StoredBounds(const T& p)
+{
+  Bounds b;
+  b.lo = glm::vec3(p.lo[0], p.lo[1], p.lo[2]);
+  b.hi = glm::vec3(p.hi[0], p.hi[1], p.hi[2]);
+  return b;
+}
+template <class T>
+void StoredRefBounds(const T& p, glm::dvec3& lo, glm::dvec3& hi)
+{
+  lo = ref::D3(p.lo);
+  hi = ref::D3(p.hi);
+}
+template <class T>
+void StoredRefBall(const T& p, glm::dvec3& mid, double& reach)
+{
+  const glm::dvec3 pts[2] = {ref::D3(p.lo), ref::D3(p.hi)};
+  ref::BallOf(pts, 2, 0.0, mid, reach);
+}
+template <class T>
+bool StoredBoundsMeet(const T& p, const glm::dvec3& lo, const glm::dvec3& hi)
+{
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] > double(p.hi[a]) || hi[a] < double(p.lo[a])) return false;
+  return true;
+}
+
 // a and b's common part (empty when they are disjoint).
 inline Bounds Intersect(const Bounds& a, const Bounds& b)
 {

@@ -121,15 +121,7 @@ const char* PrimTypeName(PrimTag<Sdf>) { return "sdf"; }
 // eps shell or grazes the surface.
 double HitSlack(const Sdf& s) { return 2.0 * double(s.eps); }
 
-Bounds FloatBounds(const Sdf& s)
-{
-  Bounds b;
-  for (int i = 0; i < 3; ++i) {
-    b.lo[i] = s.lo[i];
-    b.hi[i] = s.hi[i];
-  }
-  return b;
-}
+Bounds FloatBounds(const Sdf& s) { return StoredBounds(s); }
 
 void SplitBounds(const Sdf& s, const Bounds& box, int axis, float pos, Bounds& left, Bounds& right)
 {
@@ -139,12 +131,7 @@ void SplitBounds(const Sdf& s, const Bounds& box, int axis, float pos, Bounds& l
 // Conservative: every cell the bound meets (a distance program is a bound
 // on the distance only where it is exact; a smooth union or a repetition
 // need not be).
-bool OverlapsBox(const Sdf& s, const glm::dvec3& lo, const glm::dvec3& hi)
-{
-  for (int a = 0; a < 3; ++a)
-    if (lo[a] > double(s.hi[a]) || hi[a] < double(s.lo[a])) return false;
-  return true;
-}
+bool OverlapsBox(const Sdf& s, const glm::dvec3& lo, const glm::dvec3& hi) { return StoredBoundsMeet(s, lo, hi); }
 
 double Scale(const Sdf& s) { return std::max(MaxAbs(D3(s.lo)), MaxAbs(D3(s.hi))); }
 
@@ -162,11 +149,7 @@ LocalSurface SurfaceAt(const Scene&, const Sdf& s, std::uint32_t, const glm::dve
   return ls;
 }
 
-void RefBounds(const Sdf& s, glm::dvec3& lo, glm::dvec3& hi)
-{
-  lo = D3(s.lo);
-  hi = D3(s.hi);
-}
+void RefBounds(const Sdf& s, glm::dvec3& lo, glm::dvec3& hi) { StoredRefBounds(s, lo, hi); }
 
 int RefRoots(const ref::DRay& r, const Sdf& s, double t[2], double*, double*)
 {
@@ -185,11 +168,7 @@ glm::dvec3 RefNormal(const Sdf& s, const glm::dvec3& x)
   return Gradient(s, x, std::max(std::ldexp(Size(s), -24), 1e-3 * double(s.eps)));
 }
 
-void RefBall(const Sdf& s, glm::dvec3& mid, double& reach)
-{
-  const glm::dvec3 pts[2] = {D3(s.lo), D3(s.hi)};
-  ref::BallOf(pts, 2, 0.0, mid, reach);
-}
+void RefBall(const Sdf& s, glm::dvec3& mid, double& reach) { StoredRefBall(s, mid, reach); }
 
 // The ray's closest approaches: the local minima of the distance along the
 // reference march.
