@@ -35,6 +35,7 @@ typedef struct {
 #include "quadric.h"
 #include "polyhedron.h"
 #include "sdf.h"
+#include "csg.h"
 
 /* Hit_Closer for primitive g met at t by ray r, with one refinement in
  * robust mode: an exact float tie between two different spheres goes to the
@@ -146,7 +147,8 @@ CR_FUNC int Box_Intersect(CR_GLOBAL const float* bmin, CR_GLOBAL const float* bm
 
 /* The .hits record of a finished query: closest hit (t, prim id, u, v) or
  * occlusion (t = 0, an occluder's id); a miss is (+inf, CR_NO_HIT). u, v are
- * reported for whole triangle statements only (FORMATS.md).
+ * reported for whole triangle statements only (FORMATS.md); a hit on a CSG
+ * solid reports its leaf statement.
  * With `unified` set, the record is the renderer's internal form instead: prim
  * holds the unified piece index g and u, v are the barycentrics of every
  * triangle piece (primIds is not read). */
@@ -162,6 +164,17 @@ CR_FUNC HitRecord Hit_ToRecord(const Hit* h, const PrimView* pv, CR_GLOBAL const
   }
   r.prim = unified ? h->g : primIds[h->g];
   r.t = anyHit ? 0.0f : (float)h->t;
+  /* A CSG solid: the leaf statement (its index in the block, in u), and
+   * in the renderer's form the leaf and its normal's side. */
+  CR_IF(CSG, if (Prim_Is(&pv->ranges, CR_PRIM_CSG, h->g)) {
+    if (unified) {
+      r.u = (float)h->u;
+      r.v = (float)h->v;
+    } else {
+      r.prim += (uint)h->u;
+    }
+    return r;
+  })
   if (!anyHit && Prim_Is(&pv->ranges, CR_PRIM_TRIANGLE, h->g) &&
       (unified || (pv->triangles[Prim_Local(&pv->ranges, CR_PRIM_TRIANGLE, h->g)].flags & CR_TRI_REPORT_UV))) {
     r.u = (float)h->u;

@@ -66,6 +66,7 @@ using std::floor;
 using std::rint;
 using std::fmax;
 using std::fmin;
+using std::nextafter;
 using std::sqrt;
 inline uint cr_popcount(uint x) { return static_cast<uint>(std::popcount(x)); }
 inline uint cr_float_bits(float x) { return std::bit_cast<uint>(x); }

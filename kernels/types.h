@@ -144,6 +144,30 @@ typedef struct {
   SdfOp op[CR_SDF_MAX_OPS];
 } Sdf;
 
+/* CSG solid (NFF extension `csg union|intersection|difference` ... `csg
+ * end`, kernels/csg.h): a boolean expression over up to CR_CSG_MAX_LEAVES
+ * convex leaf solids (sphere, box, polyhedron, ellipsoidal quadric), in
+ * postfix order: node k (byte k of `node`, nNodes of them) is a leaf index
+ * below CR_CSG_UNION or one of the operators, which pop two and push one.
+ * leaf[i]: the leaf's type CR_PRIM_* in bits 0-7, its first word in bits
+ * 8-15; its record is packed in words (kernels/csg.h Csg_Sphere, ...).
+ * lo, hi: the solid's float box. 1248 bytes. */
+#define CR_CSG_MAX_LEAVES 32
+#define CR_CSG_MAX_NODES 64
+#define CR_CSG_MAX_WORDS 64
+#define CR_CSG_UNION 64u
+#define CR_CSG_INTERSECTION 65u
+#define CR_CSG_DIFFERENCE 66u
+typedef struct {
+  float lo[3];
+  uint nNodes;
+  float hi[3];
+  uint nLeaves;
+  uint node[CR_CSG_MAX_NODES / 4];
+  uint leaf[CR_CSG_MAX_LEAVES];
+  float word[CR_CSG_MAX_WORDS][4];
+} Csg;
+
 /* The primitive types, one entry each, in unified-index order:
  * X(Type, UPPER, array): the layout `Type` (below), its index constant
  * CR_PRIM_<UPPER>, PrimView's array `array`, and its test Type_Test (and
@@ -153,7 +177,7 @@ typedef struct {
  * list (kernels/intersect.h, packet.cl). */
 #define CR_PRIM_TYPES(X) \
   X(Sphere, SPHERE, spheres) X(Triangle, TRIANGLE, triangles) X(Cone, CONE, cones) X(Box, BOX, boxes) \
-      X(Quadric, QUADRIC, quadrics) X(Polyhedron, POLYHEDRON, polyhedra) X(Sdf, SDF, sdfs)
+      X(Quadric, QUADRIC, quadrics) X(Polyhedron, POLYHEDRON, polyhedra) X(Sdf, SDF, sdfs) X(Csg, CSG, csgs)
 #define CR_PRIM_SPHERE 0u
 #define CR_PRIM_TRIANGLE 1u
 #define CR_PRIM_CONE 2u
@@ -161,7 +185,8 @@ typedef struct {
 #define CR_PRIM_QUADRIC 4u
 #define CR_PRIM_POLYHEDRON 5u
 #define CR_PRIM_SDF 6u
-#define CR_NUM_PRIM_TYPES 7u
+#define CR_PRIM_CSG 7u
+#define CR_NUM_PRIM_TYPES 8u
 /* Whether a kernel is built for a type: CR_HAS_<UPPER> is 1 or 0 (default
  * 1, in the type's header; an OpenCL program is built with only its
  * scene's types, -DCR_HAS_<UPPER>=0 for the others). CR_IF(UPPER, code)
@@ -179,7 +204,7 @@ typedef struct {
 
 /* Where each type's unified indices begin: type k holds [begin[k],
  * begin[k + 1]), begin[CR_NUM_PRIM_TYPES] is the number of primitives;
- * padded to a multiple of 16 bytes (32 for 4 to 7 types). */
+ * padded to a multiple of 16 bytes (48 for 8 to 11 types). */
 #define CR_PRIM_RANGE_SLOTS ((CR_NUM_PRIM_TYPES + 4u) & ~3u)
 typedef struct {
   uint begin[CR_PRIM_RANGE_SLOTS];
@@ -294,6 +319,7 @@ static_assert(sizeof(Box) == 32 && offsetof(Box, hi) == 16);
 static_assert(sizeof(Quadric) == 64 && offsetof(Quadric, extent) == 16 && offsetof(Quadric, q) == 28);
 static_assert(sizeof(Polyhedron) == 48 + 16 * CR_POLY_MAX_PLANES && offsetof(Polyhedron, plane) == 48);
 static_assert(sizeof(Sdf) == 64 + 32 * CR_SDF_MAX_OPS && offsetof(Sdf, op) == 64);
+static_assert(sizeof(Csg) == 224 + 16 * CR_CSG_MAX_WORDS && offsetof(Csg, word) == 224);
 static_assert(sizeof(PrimRanges) % 16 == 0);
 static_assert(sizeof(BVHHeader) == 16);
 static_assert(sizeof(BVHNode) == 32 && offsetof(BVHNode, first) == 12 && offsetof(BVHNode, count) == 28);

@@ -23,7 +23,7 @@ namespace cr::simd::CR_SIMD_NS {
 struct PolyhedronScalar {
   template <bool kFast>
   CR_SIMD_INLINE static bool Run(const float o[3], const float d[3], const Polyhedron& p, float tmin, float tmax,
-                                 float* th)
+                                 float* th, float*, float*)
   {
     if constexpr (kFast)
       return Polyhedron_IntersectR(o, d, &p, tmin, tmax, th) != 0;

@@ -27,3 +27,4 @@ struct SimdTest;
 #include "simd/quadric.h"
 #include "simd/polyhedron.h"
 #include "simd/sdf.h"
+#include "simd/csg.h"

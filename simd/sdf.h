@@ -19,7 +19,8 @@ namespace cr::simd::CR_SIMD_NS {
 
 struct SdfScalar {
   template <bool kFast>
-  CR_SIMD_INLINE static bool Run(const float o[3], const float d[3], const Sdf& p, float tmin, float tmax, float* th)
+  CR_SIMD_INLINE static bool Run(const float o[3], const float d[3], const Sdf& p, float tmin, float tmax, float* th,
+                                 float*, float*)
   {
     return Sdf_March(o, d, &p, tmin, tmax, kFast ? 0 : CR_SDF_REFINE, th) != 0;
   }

@@ -12,6 +12,21 @@
 
 namespace cr::bench {
 
+namespace {
+// The kinds LoadBenchScene generates (gen:KIND:N).
+const std::string_view kGenKinds[] = {"sphereflake", "bumpy", "stadium", "quadrics", "polyhedra", "sdf", "csg"};
+}  // namespace
+
+std::string GeneratedKinds()
+{
+  std::string s;
+  for (std::string_view k : kGenKinds) {
+    if (!s.empty()) s += '|';
+    s += k;
+  }
+  return s;
+}
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -36,10 +51,8 @@ std::optional<SceneRef> GeneratedRef(const std::string& name)
   auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
   if (ec != std::errc() || p != num.data() + num.size())
     throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (kind != "sphereflake" && kind != "bumpy" && kind != "stadium" && kind != "quadrics" && kind != "polyhedra" &&
-      kind != "sdf")
-    throw InputError(
-        fmt::format("scene '{}': generated kinds are sphereflake, bumpy, stadium, quadrics, polyhedra and sdf", name));
+  if (std::find(std::begin(kGenKinds), std::end(kGenKinds), kind) == std::end(kGenKinds))
+    throw InputError(fmt::format("scene '{}': generated kinds are {}", name, GeneratedKinds()));
   return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
 }
 
@@ -126,8 +139,8 @@ std::vector<SceneRef> ResolveScenes(const std::vector<std::string>& names, std::
       }
     if (!found)
       throw InputError(fmt::format("unknown scene '{}': not a file, not an SPD scene (scenes/spd/{}.nff), not a mesh "
-                                   "(../shared/scenes/meshes/{}.obj), not gen:sphereflake|bumpy|stadium|quadrics|polyhedra|sdf:N",
-                                   n, n, n));
+                                   "(../shared/scenes/meshes/{}.obj), not gen:{}:N",
+                                   n, n, n, GeneratedKinds()));
   }
   return out;
 }
@@ -143,6 +156,7 @@ Scene LoadBenchScene(const SceneRef& ref)
   if (kind == "quadrics") return GenerateQuadricField(n);
   if (kind == "polyhedra") return GeneratePolyhedronField(n);
   if (kind == "sdf") return GenerateSdfField(n);
+  if (kind == "csg") return GenerateCsgField(n);
   return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
 }
 

@@ -24,6 +24,9 @@ struct SceneRef {
 // neither leads to it.
 std::string FindSourceRoot();
 
+// The generated scene kinds (gen:KIND:N), as "a|b|c" for help and messages.
+std::string GeneratedKinds();
+
 // The 7 SPD scenes of the benchmark issue, in order.
 const std::vector<std::string>& DefaultSpdScenes();
 

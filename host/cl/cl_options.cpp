@@ -84,6 +84,14 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
         for (std::uint32_t k = 0; k < b.count; ++k) ops |= 1u << b.op[k].op;
       if (!scene.sdfs.empty()) s.defines.push_back(fmt::format("CR_SDF_OPS={:#x}u", ops));
     }
+    // A CSG program holds the tests of its blocks' leaf types only
+    // (kernels/csg.h CR_CSG_LEAVES).
+    if (((s.types >> CR_PRIM_CSG) & 1u) && !scene.csgs.empty()) {
+      std::uint32_t leaves = 0;
+      for (const Csg& b : scene.csgs)
+        for (std::uint32_t i = 0; i < b.nLeaves; ++i) leaves |= 1u << (b.leaf[i] & 255u);
+      s.defines.push_back(fmt::format("CR_CSG_LEAVES={:#x}u", leaves));
+    }
   }
   // A packet is one work-group, a screen tile of primary rays. On a CPU
   // (PoCL) 4x4: 16 lanes, one AVX-512 vector of floats; there 8x8 was up to

@@ -129,7 +129,7 @@ Run RegisterBench(CLI::App& app)
                                           "the error of every answer; results.json, results.md and plots");
   cmd->add_option("scenes", o->scenes,
                   "Scene files or names: SPD (balls ...), meshes (../shared/scenes/meshes/NAME.obj), "
-                  "gen:sphereflake|bumpy|stadium|quadrics|polyhedra|sdf:N (default: the 7 SPD scenes and the meshes)");
+                  "gen:" + bench::GeneratedKinds() + ":N (default: the 7 SPD scenes and the meshes)");
   cmd->add_option("--accel", o->accels, "Structures, comma-separated: " + AccelKindNames())->delimiter(',');
   cmd->add_option("--backend", o->backends, "Backends, comma-separated: reference,scalar,simd,opencl,embree")->delimiter(',');
   cmd->add_option("--kinds", o->kinds, "Ray kinds, comma-separated: primary,shadow,diffuse,random")->delimiter(',');

@@ -111,6 +111,9 @@ void UserOccluded(const RTCOccludedFunctionNArguments* args)
     float t = 0.0f, u = 0.0f, v = 0.0f;
     if (!KernelTest(&r, &prim, RTCRayN_tnear(args->ray, N, i), RTCRayN_tfar(args->ray, N, i), &t, &u, &v)) continue;
     RTCRayN_tfar(args->ray, N, i) = -INFINITY;
+    // A CSG solid's occluder is the leaf its first crossing names: left
+    // unrecorded, the tracer looks it up with a closest-hit query.
+    if constexpr (std::is_same_v<T, Csg>) continue;
     if (i < octx->lanes && octx->occluder[i] == CR_NO_HIT) octx->occluder[i] = octx->base[args->geomID] + args->primID;
   }
 }

@@ -101,7 +101,8 @@ class EmbreeTracer final : public Tracer {
   std::vector<std::uint32_t> primIds_;
   std::unique_ptr<EmbreeScene> es_;
   // Occluded rays whose occluder the filter did not record (looked up with
-  // a closest-hit query instead); expected to stay 0.
+  // a closest-hit query instead); expected to stay 0 but for CSG solids,
+  // whose occluding leaf is looked up so.
   mutable std::atomic<std::uint64_t> occluderLookups_{0};
 
   static void SetRay(RTCRay& r, const RayRecord& rec)
@@ -138,6 +139,15 @@ class EmbreeTracer final : public Tracer {
   HitRecord RecordOfUnified(std::uint32_t g, float t, float u, float v, bool occlusion) const
   {
     HitRecord h{occlusion ? 0.0f : t, unified_ ? g : primIds_[g], 0.0f, 0.0f};
+    if (Prim_Is(&ranges_, CR_PRIM_CSG, g)) {  // the leaf (kernels/csg.h)
+      if (unified_) {
+        h.u = u;
+        h.v = v;
+      } else {
+        h.prim += static_cast<std::uint32_t>(u);
+      }
+      return h;
+    }
     if (!occlusion && Prim_Is(&ranges_, CR_PRIM_TRIANGLE, g) &&
         (unified_ || (scene_.triangles[Prim_Local(&ranges_, CR_PRIM_TRIANGLE, g)].flags & CR_TRI_REPORT_UV))) {
       h.u = u;

@@ -89,8 +89,25 @@ double HitSlack(const T&)
 }
 double HitSlack(const Sdf& s);
 
+// A part of a piece (PrimInfo::part: a CSG solid's leaf) as check judges
+// it: the roots in [tmin, tmax] where that part bounds the piece, and the
+// distance from x to the piece's surface there; for a whole piece, RefRoots
+// and RefDistance.
+template <class T>
+int RefPartRoots(const ref::DRay& r, const T& p, std::uint32_t, double t[2])
+{
+  return RefRoots(r, p, t, nullptr, nullptr);
+}
+template <class T>
+double RefPartDistance(const T& p, std::uint32_t, const glm::dvec3& x)
+{
+  return RefDistance(p, x);
+}
+int RefPartRoots(const ref::DRay& r, const Csg& c, std::uint32_t part, double t[2]);
+double RefPartDistance(const Csg& c, std::uint32_t part, const glm::dvec3& x);
+
 // The types whose record holds its float box as lo[3], hi[3] (box,
-// polyhedron, SDF block) share these: that box as Bounds and in double, the
+// polyhedron, SDF block, CSG solid) share these: that box as Bounds and in double, the
 // ball around it, and whether a cell meets it.
 template <class T>
 Bounds StoredBounds(const T& p)

@@ -41,7 +41,7 @@ bool MeetsPrim(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r, std
   tr.PiecesOf(prim, pieces);
   for (std::uint32_t g : pieces) {
     double t[2];
-    if (tr.PieceRoots(g, r, t) > 0) return true;
+    if (tr.PrimRoots(prim, g, r, t) > 0) return true;
   }
   return false;
 }
@@ -139,7 +139,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   auto missVerdict = [&]() {
     tr.AllHits(r, all);
     for (const RefHit& h : all)
-      if (!Marginal(tr, scene.IdOfUnified(h.g), r, h.t, Delta(r, h.t) + Slack(tr, scene.IdOfUnified(h.g))))
+      if (!Marginal(tr, tr.IdOfHit(h), r, h.t, Delta(r, h.t) + Slack(tr, tr.IdOfHit(h))))
         return Verdict::WrongMissed;
     return Verdict::Flip;
   };
@@ -167,7 +167,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   if (!testHit) return ref.Found() ? missVerdict() : Verdict::Agree;
   const double t = hit.t;
   const double delta = Delta(r, t) + Slack(tr, hit.prim);
-  if (ref.Found() && scene.IdOfUnified(ref.g) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
+  if (ref.Found() && tr.IdOfHit(ref) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
     *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
     return Verdict::Agree;
   }
@@ -181,7 +181,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   // Nothing robust may lie before it.
   tr.AllHits(r, all);
   for (const RefHit& h : all) {
-    const std::uint32_t hp = scene.IdOfUnified(h.g);
+    const std::uint32_t hp = tr.IdOfHit(h);
     const double deltaH = Delta(r, h.t) + Slack(tr, hp);
     if ((t - h.t) * dl <= std::max(delta, deltaH)) continue;
     if (!Marginal(tr, hp, r, h.t, deltaH)) return Verdict::WrongFarther;

@@ -108,6 +108,12 @@ int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], d
   return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefRoots(ray, piece, t, u, v); });
 }
 
+int ReferenceTracer::PrimRoots(std::uint32_t prim, std::uint32_t g, const DRay& ray, double t[2]) const
+{
+  const std::uint32_t part = scene_.prims[prim].part;
+  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefPartRoots(ray, piece, part, t); });
+}
+
 RefHit ReferenceTracer::Intersect(const DRay& ray) const
 {
   RefHit best;
@@ -170,7 +176,9 @@ double ReferenceTracer::DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) 
   PiecesOf(prim, pieces);
   double best = INFINITY;
   for (std::uint32_t g : pieces) {
-    const double d = scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefDistance(piece, p); });
+    const std::uint32_t part = scene_.prims[prim].part;
+    const double d =
+        scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefPartDistance(piece, part, p); });
     best = std::min(best, d);
   }
   return best;
@@ -206,7 +214,7 @@ HitRecord ReferenceTracer::ToRecord(const RefHit& h, bool occlusion) const
 {
   HitRecord r{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
   if (!h.Found()) return r;
-  r.prim = scene_.IdOfUnified(h.g);
+  r.prim = IdOfHit(h);
   if (occlusion) {
     r.t = 0.0f;
     return r;
@@ -230,7 +238,7 @@ HitRecord ReferenceTracer::ToUnifiedRecord(const RefHit& h, bool occlusion) cons
   if (!h.Found()) return r;
   r.prim = h.g;
   r.t = occlusion ? 0.0f : static_cast<float>(h.t);
-  if (!occlusion && Prim_Is(&ranges_, CR_PRIM_TRIANGLE, h.g)) {
+  if (Prim_Is(&ranges_, CR_PRIM_CSG, h.g) || (!occlusion && Prim_Is(&ranges_, CR_PRIM_TRIANGLE, h.g))) {
     r.u = static_cast<float>(h.u);
     r.v = static_cast<float>(h.v);
   }

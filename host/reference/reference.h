@@ -35,6 +35,11 @@ class ReferenceTracer {
   void AllHits(const DRay& ray, std::vector<RefHit>& out) const;
   // Roots of one piece in [tmin, tmax]; returns their count (<= 2).
   int PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u = nullptr, double* v = nullptr) const;
+  // Roots of primitive id `prim` on its piece g: PieceRoots, or for a part
+  // of a piece (a CSG leaf) the roots where that part bounds the piece.
+  int PrimRoots(std::uint32_t prim, std::uint32_t g, const DRay& ray, double t[2]) const;
+  // The primitive id a hit names (a CSG solid's leaf, by its u).
+  std::uint32_t IdOfHit(const RefHit& h) const { return scene_.IdOfHit(h.g, h.u); }
   // Distance from p to the surface of primitive id `prim` (all its pieces);
   // INFINITY for an id without geometry.
   double DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) const;

@@ -92,7 +92,7 @@ class Shader {
     if (hit.prim == CR_NO_HIT) return pr.weight * scene_.background;
 
     const std::uint32_t g = hit.prim;
-    const std::uint32_t id = scene_.IdOfUnified(g);
+    const std::uint32_t id = scene_.IdOfHit(g, hit.u);
     const PrimInfo& info = scene_.prims[id];
     const Material& m = scene_.materials[info.material];
     const glm::dvec3 o(pr.ray.org[0], pr.ray.org[1], pr.ray.org[2]);
@@ -307,7 +307,7 @@ Image Render(const Scene& scene, Tracer& tracer, const RenderOptions& optIn, Ren
             accum[shadows[i].sample] += shadows[i].light;
           } else {
             st.shadowHits++;
-            if (shadows[i].sourceOpaque && scene.IdOfUnified(hits[i].prim) == shadows[i].sourcePrim) st.selfShadowed++;
+            if (shadows[i].sourceOpaque && scene.IdOfHit(hits[i].prim, hits[i].u) == shadows[i].sourcePrim) st.selfShadowed++;
           }
         }
       }

@@ -361,4 +361,45 @@ Scene GenerateSdfField(std::uint64_t n)
   return s;
 }
 
+Scene GenerateCsgField(std::uint64_t n)
+{
+  if (n < 1 || n > (std::uint64_t(1) << 22))
+    throw InputError(fmt::format("CSG field of {} solids: expected 1 .. 2^22", n));
+  const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+  const double half = side;  // cells 2 units across
+  Scene s = FieldBase(half);
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  auto uni = [&](double lo, double hi) { return SplitMix(state, lo, hi); };
+  std::string text;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) {
+      const double x = -half + 2.0 * i + 1.0, y = -half + 2.0 * j + 1.0;
+      const double h = uni(0.45, 0.65), z = h + 0.05;
+      text += fmt::format("f {} {} {} 0.7 0.3 30 0 1\n", uni(0.4, 0.95), uni(0.4, 0.95), uni(0.4, 0.95));
+      switch (int(uni(0.0, 3.0))) {
+        case 0:  // a rounded cube with three bites
+          text += fmt::format("csg difference\ncsg intersection\nbox {} {} {} {} {} {}\ns {} {} {} {}\ncsg end\n", x - h,
+                              y - h, z - h, x + h, y + h, z + h, x, y, z, 1.4 * h);
+          for (int k = 0; k < 3; ++k)
+            text += fmt::format("s {} {} {} {}\n", x + uni(-h, h), y + uni(-h, h), z + h, uni(0.15, 0.3) * h);
+          text += "csg end\n";
+          break;
+        case 1:  // a lens with a notch
+          text += fmt::format("csg difference\ncsg intersection\ns {} {} {} {}\ns {} {} {} {}\ncsg end\n", x, y - 0.5 * h,
+                              z, 1.1 * h, x, y + 0.5 * h, z, 1.1 * h);
+          text += fmt::format("box {} {} {} {} {} {}\ncsg end\n", x - 0.2 * h, y - h, z, x + 0.2 * h, y + h, z + h);
+          break;
+        default:  // three bars with a spherical bite
+          text += fmt::format("csg difference\ncsg union\nbox {} {} {} {} {} {}\nbox {} {} {} {} {} {}\n", x - h,
+                              y - 0.2 * h, z - 0.2 * h, x + h, y + 0.2 * h, z + 0.2 * h, x - 0.2 * h, y - h, z - 0.2 * h,
+                              x + 0.2 * h, y + h, z + 0.2 * h);
+          text += fmt::format("box {} {} {} {} {} {}\ncsg end\ns {} {} {} {}\ncsg end\n", x - 0.2 * h, y - 0.2 * h,
+                              z - h, x + 0.2 * h, y + 0.2 * h, z + h, x + 0.5 * h, y + 0.5 * h, z + 0.5 * h, 0.6 * h);
+          break;
+      }
+    }
+  ParseNFF(text, s.path, s);
+  return s;
+}
+
 }  // namespace cr

@@ -42,6 +42,12 @@ Scene GeneratePolyhedronField(std::uint64_t n);
 // relaxation 1.5, as the quadric field.
 Scene GenerateSdfField(std::uint64_t n);
 
+// A field of about n CSG solids (NFF extension `csg`), one per cell: a
+// rounded cube with three bites, a notched lens or three crossed bars with
+// a spherical bite (4 to 5 leaves, so about 4.3 n primitives; seeded), as
+// the quadric field.
+Scene GenerateCsgField(std::uint64_t n);
+
 // Writes a generated scene (spheres and triangles) as NFF.
 void WriteNFF(const Scene& scene, const std::string& path);
 

@@ -154,6 +154,10 @@ class LexerStatement final : public NffStatement {
     return std::string(tok->text);
   }
   long TokenLine() const override { return lx_.EofLine(); }
+  std::unique_ptr<NffStatement> Next(std::string_view kw, long at, std::uint32_t m) override
+  {
+    return std::make_unique<LexerStatement>(lx_, kw, at, m);
+  }
   [[noreturn]] void Fail(const std::string& what) override { lx_.Fail(line, what); }
   [[noreturn]] void FailAt(long at, const std::string& what) override { lx_.Fail(at, what); }
 
@@ -165,6 +169,20 @@ class LexerStatement final : public NffStatement {
 }  // namespace
 
 void NffValues::Fail(const std::string& what) { throw InputError(file, line, what); }
+
+std::uint32_t ReadMaterial(NffStatement& st, Scene& scene)
+{
+  Material m;
+  m.color = F(st.Vec("a colour component"));
+  m.kd = float(st.Number("Kd"));
+  m.ks = float(st.Number("Ks"));
+  m.shine = float(st.Number("the Phong exponent"));
+  m.transmittance = float(st.Number("the transmittance T"));
+  m.ior = float(st.Number("the index of refraction"));
+  if (m.ior < 0.0f) st.Fail(fmt::format("'f': index of refraction {} is negative", m.ior));
+  scene.materials.push_back(m);
+  return static_cast<std::uint32_t>(scene.materials.size() - 1);
+}
 
 bool ReadGeometry(NffStatement& st, Scene& scene)
 {
@@ -223,16 +241,8 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
       if (lx.MoreOnLine()) l.color = F(Vec(lx, "l", line, "a light colour component"));
       scene.lights.push_back(l);
     } else if (kw == "f") {
-      Material m;
-      m.color = F(Vec(lx, "f", line, "a colour component"));
-      m.kd = float(lx.Number("f", line, "Kd"));
-      m.ks = float(lx.Number("f", line, "Ks"));
-      m.shine = float(lx.Number("f", line, "the Phong exponent"));
-      m.transmittance = float(lx.Number("f", line, "the transmittance T"));
-      m.ior = float(lx.Number("f", line, "the index of refraction"));
-      if (m.ior < 0.0f) lx.Fail(line, fmt::format("'f': index of refraction {} is negative", m.ior));
-      scene.materials.push_back(m);
-      material = static_cast<std::uint32_t>(scene.materials.size() - 1);
+      LexerStatement st(lx, kw, line, material);
+      material = ReadMaterial(st, scene);
     } else {
       // Geometry: the statement of some primitive type (host/prims/).
       LexerStatement st(lx, kw, line, material);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -43,6 +44,15 @@ class NffStatement {
   virtual long TokenLine() const { return line; }
   [[noreturn]] virtual void Fail(const std::string& what) = 0;
   [[noreturn]] virtual void FailAt(long at, const std::string& what) = 0;
+  // The statement `kw` (at line `at`, with material m) that follows in the
+  // same text: a block's operands (a CSG block's leaves and `f` lines).
+  virtual std::unique_ptr<NffStatement> Next(std::string_view kw, long at, std::uint32_t m)
+  {
+    (void)kw;
+    (void)m;
+    FailAt(at, "a generated statement holds no other statement");
+    return nullptr;
+  }
   // A PrimInfo for a one-piece statement of type k at this line.
   PrimInfo Info(std::uint32_t k) const
   {
@@ -77,6 +87,10 @@ class NffValues final : public NffStatement {
   std::vector<double> values_;
   std::size_t next_ = 0;
 };
+
+// Reads the numbers of an `f` statement (colour, Kd, Ks, Phong exponent,
+// T, index of refraction) and adds the material; returns its index.
+std::uint32_t ReadMaterial(NffStatement& st, Scene& scene);
 
 // Reads a geometry statement with the ParseNff of the type it belongs to
 // (host/prims/); false if no type knows its keyword.

@@ -53,6 +53,13 @@ std::uint32_t Scene::IdOfUnified(std::uint32_t g) const
   throw std::out_of_range("unified primitive index past the scene's primitives");
 }
 
+std::uint32_t Scene::IdOfHit(std::uint32_t g, double u) const
+{
+  const PrimRanges r = Ranges();
+  const std::uint32_t id = IdOfUnified(g);
+  return Prim_Is(&r, CR_PRIM_CSG, g) ? id + static_cast<std::uint32_t>(u) : id;
+}
+
 std::vector<std::uint32_t> Scene::UnifiedIds() const
 {
   std::vector<std::uint32_t> ids;

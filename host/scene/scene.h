@@ -60,6 +60,10 @@ struct PrimInfo {
   std::uint32_t line = 0;        // line of the statement in its file
   std::uint32_t firstPiece = 0;  // index into the array of its type
   std::uint32_t nPieces = 0;     // 0: degenerate, no geometry
+  // A part of its piece: a CSG solid's leaf statements share the solid's
+  // one piece, leaf k with part k (its id is the piece's id + k); 0 for
+  // every other statement.
+  std::uint32_t part = 0;
 };
 // "sphere", "polygon", ...: the statement's kind, or its type for a shape.
 const char* PrimInfoName(const PrimInfo& info);
@@ -150,6 +154,9 @@ struct Scene {
   PrimRanges Ranges() const;
   // Primitive id of unified index g (the types in CR_PRIM_TYPES order).
   std::uint32_t IdOfUnified(std::uint32_t g) const;
+  // Primitive id of a hit on unified index g with its u (a CSG solid's
+  // hit names its leaf by u, kernels/csg.h).
+  std::uint32_t IdOfHit(std::uint32_t g, double u) const;
   // Scene-file id of every unified index, in order.
   std::vector<std::uint32_t> UnifiedIds() const;
   // Tight bounds of primitive g / of all geometry.

@@ -86,9 +86,11 @@ inline void CheckScene(const Scene& s)
     if (p.type >= CR_NUM_PRIM_TYPES) Fail("type out of range");
     const std::vector<std::uint32_t>* ids = &s.pieceIds[p.type];
     if (std::size_t(p.firstPiece) + p.nPieces > ids->size()) Fail("pieces out of range");
+    // A CSG leaf (part k of its solid's piece): the piece reports the
+    // solid's first leaf, id - k; only part 0 counts the piece.
     for (std::uint32_t k = 0; k < p.nPieces; ++k)
-      if ((*ids)[p.firstPiece + k] != id) Fail("a piece reports another id");
-    pieces += p.nPieces;
+      if ((*ids)[p.firstPiece + k] != id - p.part) Fail("a piece reports another id");
+    if (p.part == 0) pieces += p.nPieces;
   }
   if (pieces != s.NumUnified()) Fail("pieces do not add up to the primitives");
   for (const Sphere& sp : s.spheres)
