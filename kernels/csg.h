@@ -15,6 +15,10 @@
 #ifndef CELLRAY_KERNELS_CSG_H
 #define CELLRAY_KERNELS_CSG_H
 #include "numeric.h"
+#include "sphere.h"
+#include "box.h"
+#include "quadric.h"
+#include "polyhedron.h"
 
 #ifndef CR_HAS_CSG
 #define CR_HAS_CSG 1

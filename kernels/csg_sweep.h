@@ -16,6 +16,7 @@
  *    (the subtrahend of a difference). */
 #ifndef CELLRAY_KERNELS_CSG_SWEEP_H
 #define CELLRAY_KERNELS_CSG_SWEEP_H
+#include "ray.h"
 
 /* The leaves' records in the words, from word w on: a sphere in one word;
  * a box in two (lo, hi); a quadric in four (its 16 floats in order); a

@@ -10,6 +10,8 @@
 
 #include "host/core/error.h"
 #include "host/prims/prim_host.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
 #include "host/scene/surface.h"
 #include "tests/test_util.h"
 
@@ -165,6 +167,30 @@ TEST_CASE("csg: coincident faces, nesting and every operand kind on closed forms
       CHECK(h[5].prim == 8);
       CHECK(h[5].t == doctest::Approx(0.101).epsilon(1e-3));
     }
+  // check judges a leaf by its part of the solid: the shared face of the
+  // union (x = 1) and the flush cut's hidden face (x = 2) are no surface,
+  // named by either leaf; a leaf that does not bound the solid at the
+  // point is wrong too; the true answers agree.
+  {
+    Scene one;
+    ParseNFF("csg union\n  box 0 0 0 1 1 1\n  box 1 0 0 2 1 1\ncsg end\n"
+             "csg difference\n  box 0 3 0 2 4 1\n  box 1 3 0 2 4 1\ncsg end\n",
+             "judged", one);
+    const ref::ReferenceTracer tr(one);
+    const RayRecord across{{-1.0f, 0.5f, 0.5f}, 0.0f, {1.0f, 0.0f, 0.0f}, INFINITY};
+    const RayRecord back{{3.0f, 3.5f, 0.5f}, 0.0f, {-1.0f, 0.0f, 0.0f}, INFINITY};
+    auto wrong = [&](const RayRecord& r, float t, std::uint32_t prim) {
+      return ref::CheckHits(tr, {r}, {HitRecord{t, prim, 0.0f, 0.0f}}, false).wrong;
+    };
+    CHECK(wrong(across, 1.0f, 0) == 0);
+    CHECK(wrong(across, 2.0f, 0) == 1);
+    CHECK(wrong(across, 2.0f, 1) == 1);
+    CHECK(wrong(across, 1.0f, 1) == 1);  // box 1 does not bound the solid at x = 0
+    CHECK(wrong(back, 2.0f, 3) == 0);
+    CHECK(wrong(back, 1.0f, 2) == 1);
+    CHECK(wrong(back, 1.0f, 3) == 1);
+    CHECK(wrong(back, 2.0f, 2) == 1);  // the cut face is the subtrahend's
+  }
   // The reference agrees ray by ray.
   for (RayKind kind : {RayKind::Primary, RayKind::Random}) {
     const auto many = test::MakeRays(s, kind, 32);

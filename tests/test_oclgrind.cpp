@@ -120,13 +120,14 @@ fs::path Dir()
 
 struct TypeSet {
   const char* name;
-  bool spheres, triangles, cones, boxes = false, quadrics = false, polyhedra = false, sdfs = false;
+  bool spheres, triangles, cones, boxes = false, quadrics = false, polyhedra = false, sdfs = false, csgs = false;
 };
 // The subsets of the SPD's types, then the NFF extensions' types together
-// (box, quadric, polyhedron and SDF block: one set, each program holding the four).
+// (box, quadric, polyhedron, SDF block and CSG solid: one set, each program
+// holding the five).
 constexpr TypeSet kTypeSets[] = {{"s", true, false, false},  {"t", false, true, false}, {"c", false, false, true},
                                  {"st", true, true, false},  {"sc", true, false, true}, {"tc", false, true, true},
-                                 {"stc", true, true, true},  {"bqhf", false, false, false, true, true, true, true}};
+                                 {"stc", true, true, true},  {"bqhfg", false, false, false, true, true, true, true, true}};
 
 // A 3 x 3 x 2 block of primitives, the set's types in turn: 18 primitives,
 // enough for interior BVH nodes (leaves of 4), a subdivided octree (leaves
@@ -141,6 +142,7 @@ std::string SceneText(const TypeSet& ts)
   if (ts.quadrics) types.push_back('q');
   if (ts.polyhedra) types.push_back('h');
   if (ts.sdfs) types.push_back('f');
+  if (ts.csgs) types.push_back('g');
   std::string s =
       "b 0.1 0.1 0.1\nv\nfrom 0.3 -6 1.2\nat 0 0 0.55\nup 0 0 1\nangle 30\nhither 0.01\nresolution 4 4\n"
       "l 3 -6 6\nf 0.8 0.5 0.3 0.6 0.2 20 0.3 1.3\n";
@@ -166,6 +168,11 @@ std::string SceneText(const TypeSet& ts)
             s += fmt::format("polyhedron 5\n0 0 -1 {}\n0.8 0 0.6 {}\n-0.8 0 0.6 {}\n0 0.8 0.6 {}\n0 -0.8 0.6 {}\n",
                              h - 0.4, -0.8 * x - 0.6 * h - 0.3, 0.8 * x - 0.6 * h - 0.3, -0.8 * y - 0.6 * h - 0.3,
                              0.8 * y - 0.6 * h - 0.3);
+            break;
+          case 'g':  // a CSG solid: a lens of two spheres minus a box notch
+            s += fmt::format("csg difference\n  csg intersection\n    s {} {} {} 0.45\n    s {} {} {} 0.45\n  csg end\n"
+                             "  box {} {} {} {} {} {}\ncsg end\n",
+                             x - 0.2, y, h, x + 0.2, y, h, x - 0.1, y - 0.5, h, x + 0.1, y + 0.5, h + 0.5);
             break;
           case 'f':  // an SDF block: a ball smoothly joined to a box, relaxed marching
             s += fmt::format("sdf {} {} {} {} {} {} 0.001 64 1.5\n  sphere {} {} {} 0.3\n  box {} {} {} 0.35 0.2 0.2\n"

@@ -92,6 +92,15 @@ bool Inside(const Quadric& q, const glm::dvec3& x)
   return q.q[0] > 0.0f ? f < 0.0 : f > 0.0;
 }
 
+// Is x inside the solid (its leaves' open interiors combined)?
+bool Member(const Csg& c, const glm::dvec3& x)
+{
+  std::uint32_t mask = 0;
+  for (std::uint32_t i = 0; i < c.nLeaves; ++i)
+    if (VisitLeaf(c, i, [&](const auto& leaf) { return Inside(leaf, x); })) mask |= 1u << i;
+  return csg_fp64::Csg_Eval(&c, mask) != 0;
+}
+
 // The signed distance of leaf i at x (negative inside; exact for the
 // sphere and box, a bound for the others, from their RefDistance).
 double LeafSigned(const Csg& c, std::uint32_t i, const glm::dvec3& x)
@@ -210,12 +219,39 @@ int RefPartRoots(const ref::DRay& r, const Csg& c, std::uint32_t part, double t[
 
 double RefDistance(const Csg& c, const glm::dvec3& x) { return std::fabs(SignedDistance(c, x)); }
 
-// Near the solid's surface where leaf `part` bounds it: near both.
+// How near x is to the part of the solid's surface that leaf `part` forms,
+// as a lower bound of that distance (check accepts a hit within its
+// tolerance of it): the distance to the leaf's surface where the solid's
+// membership changes across the leaf at x's foot y there (probed 2^-26 of
+// the coordinates to either side: an internal face of a union is no
+// surface); elsewhere on the leaf, the membership along its surface can
+// only change where another leaf's surface crosses it, so the nearest such
+// surface from y (leaves lying in the same plane as the leaf at y, as a
+// union's shared faces, excepted) bounds the distance from below.
 double RefPartDistance(const Csg& c, std::uint32_t part, const glm::dvec3& x)
 {
   if (part >= c.nLeaves) return INFINITY;
-  const double own = VisitLeaf(c, part, [&](const auto& leaf) { return RefDistance(leaf, x); });
-  return std::max(own, RefDistance(c, x));
+  double own = 0.0;
+  glm::dvec3 n(0.0);
+  bool in = false;
+  VisitLeaf(c, part, [&](const auto& leaf) {
+    own = RefDistance(leaf, x);
+    n = RefNormal(leaf, x);
+    in = Inside(leaf, x);
+  });
+  const glm::dvec3 y = x + (in ? own : -own) * n;
+  const double eps = 0x1p-26 * std::max(1.0, MaxAbs(y));
+  if (Member(c, y + eps * n) != Member(c, y - eps * n)) return own;
+  double nearest = INFINITY;
+  for (std::uint32_t j = 0; j < c.nLeaves; ++j) {
+    if (j == part) continue;
+    VisitLeaf(c, j, [&](const auto& leaf) {
+      const double d = RefDistance(leaf, y);
+      if (d <= eps && std::fabs(glm::dot(RefNormal(leaf, y), n)) > 1.0 - 1e-9) return;  // the same plane
+      nearest = std::min(nearest, d);
+    });
+  }
+  return std::max(own, nearest - own);
 }
 
 glm::dvec3 RefNormal(const Csg& c, const glm::dvec3& x)

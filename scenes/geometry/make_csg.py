@@ -38,8 +38,8 @@ def main():
              "f 0.6 0.6 0.55 0.8 0 10 0 1",
              "p 4  -7 0 -6  -7 0 6  7 0 6  7 0 -6"]
     lines += die(-2.2, 1.05, 0.4)
-    # A lens: two spheres of radius 2 whose centres are 3 apart.
-    lines += ["f 0.6 0.8 0.95 0.5 0.5 80 0 1", "csg intersection", "  s 1.2 1.1 -3.3 1.6", "  s 1.2 1.1 -1.3 1.6",
+    # A lens: two spheres of radius 2 whose centres are 3.4 apart on a diagonal.
+    lines += ["f 0.6 0.8 0.95 0.5 0.5 80 0 1", "csg intersection", "  s 2.4 1.2 -3.5 2", "  s 0 1.2 -1.1 2",
               "csg end"]
     # An ellipsoid (x^2/1.2^2 + y^2/0.8^2 + z^2/1.2^2 = 1 about (2.6, 0.8, 0.9)) with a box cut out of it.
     ex, ey, ez, ax, ay, az = 2.6, 0.8, 0.9, 1.2, 0.8, 1.2
@@ -50,13 +50,13 @@ def main():
               f"    {ex - 1.5} {ey - 1.1} {ez - 1.5} {ex + 1.5} {ey + 1.1} {ez + 1.5}",
               f"  box {ex - 0.2} {ey} {ez - 2} {ex + 2} {ey + 2} {ez + 0.2}",
               "csg end"]
-    # An octahedron |x| + |y| + |z| <= 1.3 about (0.3, 1.3, 2.6) with a spherical hollow opened by a box.
+    # An octahedron |x| + |y| + |z| <= 1.3 about (0.3, 1.3, 2.6) with a spherical hollow that opens a window in each face.
     ox, oy, oz = 0.3, 1.3, 2.6
     lines += ["f 0.5 0.9 0.5 0.6 0.4 60 0 1", "csg difference", "  polyhedron 8"]
     for k in range(8):
         a, b, c = (-1 if k & 1 else 1), (-1 if k & 2 else 1), (-1 if k & 4 else 1)
         lines.append(f"    {a} {b} {c} {-(a * ox + b * oy + c * oz) - 1.3:.6g}")
-    lines += [f"  s {ox} {oy} {oz} 0.95", f"  box {ox - 2} {oy + 0.35} {oz - 2} {ox + 2} {oy + 2} {oz - 0.2}", "csg end"]
+    lines += [f"  s {ox} {oy} {oz} 0.86", "csg end"]
     # Three bars in a union (a nested block), minus a sphere.
     bx, by, bz = -1.2, 1.0, -2.6
     lines += ["f 0.85 0.75 0.3 0.6 0.4 50 0 1", "csg difference", "  csg union",

@@ -103,3 +103,8 @@ TEST_CASE("hard: SDF blocks, grazing rays, rays leaving their surface, blocks 1e
 {
   hard_test::RunAndCheck("sdf/");
 }
+
+TEST_CASE("hard: CSG solids, coincident faces, rims where two leaves meet, solids 1e6 away")
+{
+  hard_test::RunAndCheck("csg/");
+}

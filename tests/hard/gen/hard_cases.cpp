@@ -39,6 +39,7 @@ const std::vector<CaseSpec>& CaseSpecs()
     AddSelfCases(s);
     AddHugeCases(s);
     AddSdfCases(s);
+    AddCsgCases(s);
     AddDegenerateCases(s);
     AddExtremeCases(s);
     return s;

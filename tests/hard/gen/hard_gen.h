@@ -32,6 +32,7 @@ void AddDegenerateCases(std::vector<CaseSpec>& specs);
 void AddExtremeCases(std::vector<CaseSpec>& specs);
 void AddHugeCases(std::vector<CaseSpec>& specs);
 void AddSdfCases(std::vector<CaseSpec>& specs);
+void AddCsgCases(std::vector<CaseSpec>& specs);
 
 // SplitMix64 (Steele, Lea & Flood 2014): the same numbers from a seed on any
 // standard library, unlike std::uniform_real_distribution.
