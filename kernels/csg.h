@@ -5,8 +5,8 @@
  *
  * Interval classification along the ray (Roth 1982): each leaf's own test
  * (kernels/<type>.h, in the precision mode of the build) gives where the
- * ray's line enters the leaf and where it leaves it (its first crossing
- * from -inf, then its first past that); kernels/csg_sweep.h walks those
+ * ray's line enters the leaf and where it leaves it (the first crossing
+ * from -inf of the ray and of the reversed ray); kernels/csg_sweep.h walks those
  * events in order and stops at the first where the expression's value
  * changes. The hit's u is the leaf's index in the block (the reported
  * primitive is the leaf statement: kernels/intersect.h Hit_ToRecord), v is 1
@@ -31,16 +31,22 @@
 
 #include "csg_sweep.h"
 
-/* The first crossing of the leaf's surface from -inf, then the first after
- * it: where the line enters and leaves the convex leaf. */
-#define CR_CSG_SPAN_(T)                                                      \
-  {                                                                          \
-    T p;                                                                     \
-    Csg_##T(c, w, &p);                                                       \
-    if (!T##_Test(r, &p, -(real)CR_INF, (real)CR_INF, t0, &u, &v)) return 0; \
-    return T##_Test(r, &p, nextafter(*t0, (real)CR_INF), (real)CR_INF, t1, &u, &v); \
+/* Where the ray's line enters the convex leaf (its first crossing from
+ * -inf) and leaves it (the first crossing of the reversed ray `back`,
+ * negated: the tests are symmetric under d -> -d, and asking the forward
+ * ray for its first crossing past the entry instead would leave the entry
+ * undecided against that tmin and send the robust polyhedron and quadric
+ * tests to double-float every time). */
+#define CR_CSG_SPAN_(T)                                                         \
+  {                                                                             \
+    T p;                                                                        \
+    Csg_##T(c, w, &p);                                                          \
+    if (!T##_Test(r, &p, -(real)CR_INF, (real)CR_INF, t0, &u, &v)) return 0;    \
+    if (!T##_Test(back, &p, -(real)CR_INF, (real)CR_INF, t1, &u, &v)) return 0; \
+    *t1 = -*t1;                                                                 \
+    return *t1 >= *t0;                                                          \
   }
-CR_FUNC int Csg_Span(const Ray* r, const Csg* c, uint i, real* t0, real* t1)
+CR_FUNC int Csg_Span(const Ray* r, const Ray* back, const Csg* c, uint i, real* t0, real* t1)
 {
   const uint type = c->leaf[i] & 255u, w = c->leaf[i] >> 8;
   real u = (real)0.0f, v = (real)0.0f;
@@ -68,21 +74,20 @@ CR_FUNC int Csg_Test(const Ray* ray, const Csg* c, real tmin, real tmax, real* t
 {
   /* Every crossing at full accuracy: an occlusion query's shortcuts
    * (Ray.anyHit) would leave the order of two leaves' crossings open. */
-  Ray r = *ray;
-  r.anyHit = 0;
+  Ray r = *ray, back = *ray;
+  r.anyHit = back.anyHit = 0;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    back.dir[a] = -r.dir[a];
+    back.inv[a] = -r.inv[a];
+  }
   real t0[CR_CSG_MAX_LEAVES], t1[CR_CSG_MAX_LEAVES];
-  uint live = 0u, mask = 0u;
+  uint met = 0u;
   for (uint i = 0u; i < c->nLeaves; ++i) {
-    real a = (real)0.0f, b = (real)0.0f;
     t0[i] = t1[i] = (real)0.0f;
-    if (!Csg_Span(&r, c, i, &a, &b) || b < tmin || a > tmax) continue;
-    t0[i] = a;
-    t1[i] = b;
-    live |= 1u << i;
-    if (a < tmin) mask |= 1u << i;
+    if (Csg_Span(&r, &back, c, i, &t0[i], &t1[i])) met |= 1u << i;
   }
   uint leaf = 0u, flip = 0u;
-  if (!Csg_Sweep(c, t0, t1, live, mask, tmin, tmax, tHit, &leaf, &flip)) return 0;
+  if (!Csg_Classify(c, t0, t1, met, tmin, tmax, tHit, &leaf, &flip)) return 0;
   *u = (real)leaf;
   *v = (real)flip;
   return 1;

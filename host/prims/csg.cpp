@@ -194,18 +194,17 @@ int RefRoots(const ref::DRay& r, const Csg& c, double t[2], double* u, double* v
   line.tmin = -INFINITY;
   line.tmax = INFINITY;
   double t0[CR_CSG_MAX_LEAVES] = {}, t1[CR_CSG_MAX_LEAVES] = {};
-  std::uint32_t live = 0, mask = 0;
+  std::uint32_t met = 0;
   for (std::uint32_t i = 0; i < c.nLeaves; ++i) {
     double s[2];
     const int n = VisitLeaf(c, i, [&](const auto& leaf) { return RefRoots(line, leaf, s, nullptr, nullptr); });
-    if (n < 2 || s[1] < r.tmin || s[0] > r.tmax) continue;
+    if (n < 2) continue;
     t0[i] = s[0];
     t1[i] = s[1];
-    live |= 1u << i;
-    if (s[0] < r.tmin) mask |= 1u << i;
+    met |= 1u << i;
   }
   std::uint32_t leaf = 0, flip = 0;
-  if (!csg_fp64::Csg_Sweep(&c, t0, t1, live, mask, r.tmin, r.tmax, &t[0], &leaf, &flip)) return 0;
+  if (!csg_fp64::Csg_Classify(&c, t0, t1, met, r.tmin, r.tmax, &t[0], &leaf, &flip)) return 0;
   if (u) *u = double(leaf);
   if (v) *v = double(flip);
   return 1;
