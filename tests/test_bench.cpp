@@ -128,6 +128,31 @@ TEST_CASE("bench: unknown scenes and backends are bad input")
   fs::remove_all(dir);
 }
 
+TEST_CASE("bench: the SDF axis runs a scene with SDF blocks once per eps x relaxation x budget")
+{
+  const fs::path dir = TempDir("sdfaxis");
+  const std::string scenes = test::SourcePath("scenes/geometry/sdf.nff") + " " + test::SourcePath("scenes/spd/tetra.nff");
+  REQUIRE(RunBinary("bench " + scenes +
+                        " --backend simd --accel bvh --precision robust --kinds primary --rays 1024 --repeat 1 "
+                        "--no-images --no-plots --no-stats --sdf-eps 0.01,0.001 --sdf-relax 1,1.8 --sdf-steps 512 --out " +
+                        (dir / "o").string(),
+                    dir) == 0);
+  std::ifstream in(dir / "o" / "results.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  std::set<std::string> names;
+  for (const auto& r : j["rows"]) {
+    names.insert(r["scene"].get<std::string>());
+    CHECK(r["error"]["wrong"] == 0);
+  }
+  // The block scene four times (eps x relaxation, its budget replaced),
+  // tetra (no blocks) once, as written.
+  CHECK(names == std::set<std::string>{"sdf@eps=0.01,w=1,steps=512", "sdf@eps=0.01,w=1.8,steps=512",
+                                       "sdf@eps=0.001,w=1,steps=512", "sdf@eps=0.001,w=1.8,steps=512", "tetra"});
+  std::string err;
+  CHECK(RunBinary("bench tetra --sdf-relax 2 --out " + (dir / "o").string(), dir, &err) == 2);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("bench: configurations planned by default and from lists")
 {
   bench::BenchOptions o;

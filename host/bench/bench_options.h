@@ -43,6 +43,11 @@ struct BenchOptions {
   std::uint64_t statsMaxPieces = ~std::uint64_t(0);  // no statistics run above this scene size
   std::uint64_t seed = 1;
   std::string commandLine;        // recorded in results.json
+  // The SDF axis: every scene with SDF blocks runs once per combination of
+  // these, each block's hit threshold, relaxation and step budget replaced
+  // (the row's scene is then NAME@eps=E,w=W,steps=N); empty: the scene's own.
+  std::vector<double> sdfEps, sdfRelax;
+  std::vector<long> sdfSteps;
 };
 
 // The configurations a run times, in table order. With no explicit lists:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -71,22 +72,57 @@ Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlus
   return t;
 }
 
+// The settings of the bench's SDF axis (BenchOptions::sdfEps, sdfRelax,
+// sdfSteps) for a scene: one unsuffixed "as written" when the scene has no
+// blocks or the axis is not asked for.
+struct SdfSetting {
+  std::string suffix;  // "@eps=E,w=W,steps=N", or empty: the scene as written
+  double eps = 0.0, relax = 0.0;
+  long steps = 0;
+};
+std::vector<SdfSetting> SdfSettings(const BenchOptions& o, const Scene& scene)
+{
+  if (scene.sdfs.empty() || (o.sdfEps.empty() && o.sdfRelax.empty() && o.sdfSteps.empty())) return {SdfSetting{}};
+  const Sdf& first = scene.sdfs.front();
+  const std::vector<double> eps = o.sdfEps.empty() ? std::vector<double>{first.eps} : o.sdfEps;
+  const std::vector<double> relax = o.sdfRelax.empty() ? std::vector<double>{first.relax} : o.sdfRelax;
+  const std::vector<long> steps = o.sdfSteps.empty() ? std::vector<long>{long(first.steps)} : o.sdfSteps;
+  std::vector<SdfSetting> out;
+  for (double e : eps)
+    for (double w : relax)
+      for (long n : steps) out.push_back(SdfSetting{fmt::format("@eps={},w={},steps={}", e, w, n), e, w, n});
+  return out;
+}
+
 std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>& scenes, const std::vector<Combo>& combos,
                              const RowCallback& onRow)
 {
   std::vector<Row> rows;
-  const std::size_t total = scenes.size() * combos.size() * o.kinds.size();
+  std::size_t total = scenes.size() * combos.size() * o.kinds.size();
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   for (const SceneRef& sref : scenes) {
-    const Scene scene = LoadBenchScene(sref);
-    const ref::ReferenceTracer reference(scene);
+    Scene scene = LoadBenchScene(sref);
+    const std::vector<SdfSetting> settings = SdfSettings(o, scene);
+    total += (settings.size() - 1) * combos.size() * o.kinds.size();
+    // The ray sets come from the scene as written; its SDF settings share them.
+    std::unique_ptr<ref::ReferenceTracer> reference = std::make_unique<ref::ReferenceTracer>(scene);
     std::vector<RaySet> sets;
-    for (RayKind k : o.kinds) sets.push_back(GetRaySet(o.outDir, sref, scene, reference, RaySetSpec{k, o.rays, o.seed}));
+    for (RayKind k : o.kinds) sets.push_back(GetRaySet(o.outDir, sref, scene, *reference, RaySetSpec{k, o.rays, o.seed}));
+    for (const SdfSetting& setting : settings) {
+    if (!setting.suffix.empty()) {
+      for (Sdf& b : scene.sdfs) {
+        b.eps = float(setting.eps);
+        b.relax = float(setting.relax);
+        b.steps = std::uint32_t(setting.steps);
+      }
+      reference = std::make_unique<ref::ReferenceTracer>(scene);
+    }
+    const std::string suffix = setting.suffix;
     std::map<std::pair<std::size_t, std::size_t>, ErrorSummary> checked;  // (kind index, hits hash)
 
     for (const Combo& combo : combos) {
       Row proto;
-      proto.scene = sref.name;
+      proto.scene = sref.name + suffix;
       proto.scenePath = sref.shown;
       proto.prims = scene.NumPrims();
       proto.pieces = scene.NumUnified();
@@ -146,7 +182,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
             const auto key = std::make_pair(ki, HashHits(hits));
             auto it = checked.find(key);
             if (it == checked.end())
-              it = checked.emplace(key, Summarise(ref::CheckHits(reference, set.rays, hits, occlusion))).first;
+              it = checked.emplace(key, Summarise(ref::CheckHits(*reference, set.rays, hits, occlusion))).first;
             row.error = it->second;
           } catch (const InputError& e) {
             row.note = fmt::format("skipped: {}", e.what());
@@ -158,6 +194,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         rows.push_back(row);
         if (onRow) onRow(rows.back(), rows.size(), total);
       }
+    }
     }
   }
   return rows;

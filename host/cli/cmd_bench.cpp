@@ -123,6 +123,8 @@ Run RegisterBench(CLI::App& app)
     std::uint64_t rays = 0, seed = 1;
     std::string out = "bench-out", imageScene, device;
     bool hard = false, scaling = false, quick = false, noImages = false, noPlots = false, noStats = false;
+    std::vector<double> sdfEps, sdfRelax;
+    std::vector<long> sdfSteps;
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("bench", "Benchmark suite: structures x backends x ray kinds against Embree, with "
@@ -141,6 +143,17 @@ Run RegisterBench(CLI::App& app)
   cmd->add_option("--seed", o->seed, "Seed of the ray sets")->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--image-scene", o->imageScene, "Scene of the spp-against-error study (default: balls, else the first)");
+  cmd->add_option("--sdf-eps", o->sdfEps,
+                  "SDF axis: hit thresholds, comma-separated; each scene with SDF blocks runs once per value (its "
+                  "rows' scene NAME@eps=E,w=W,steps=N; default: the scene's own)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--sdf-relax", o->sdfRelax, "SDF axis: relaxation factors in [1, 2), comma-separated")
+      ->delimiter(',')
+      ->check(CLI::Range(1.0, 1.999999));
+  cmd->add_option("--sdf-steps", o->sdfSteps, "SDF axis: step budgets (1 to 2^20), comma-separated")
+      ->delimiter(',')
+      ->check(CLI::Range(1l, 1l << 20));
   cmd->add_flag("--hard", o->hard, "Run the hard-case suite instead (writes DIR/HARD_CASES.md)");
   cmd->add_flag("--scaling", o->scaling, "Run the scaling study instead (generated scenes, 10^3..10^7 primitives)");
   cmd->add_flag("--quick", o->quick, "CI size: 4096 rays per set, one timed run, a tiny image study");
@@ -159,6 +172,9 @@ Run RegisterBench(CLI::App& app)
     b.device = o->device;
     b.stats = !o->noStats;
     b.images = !o->noImages;
+    b.sdfEps = o->sdfEps;
+    b.sdfRelax = o->sdfRelax;
+    b.sdfSteps = o->sdfSteps;
     b.accels = ParseList<AccelKind>(o->accels, ParseAccelKind);
     b.backends = ParseList<Backend>(o->backends, ParseBackend);
     b.precisions = ParseList<Precision>(o->precisions, ParsePrecision);
