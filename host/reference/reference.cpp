@@ -138,10 +138,12 @@ RefHit ReferenceTracer::IntersectP(const DRay& ray) const
   RefHit any;
   double tmax = ray.tmax;
   Traverse(ray, tmax, [&](std::uint32_t g) {
-    double t[2];
-    if (PieceRoots(g, ray, t) > 0) {
+    double t[2], u = 0.0, v = 0.0;
+    if (PieceRoots(g, ray, t, &u, &v) > 0) {
       any.t = t[0];
       any.g = g;
+      any.u = u;  // a CSG solid's leaf (IdOfHit)
+      any.v = v;
       return true;
     }
     return false;
