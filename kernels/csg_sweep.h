@@ -61,29 +61,12 @@ CR_FUNC void Csg_Polyhedron(const Csg* c, uint w, Polyhedron* p)
 /* Node k of the postfix expression. */
 CR_FUNC uint Csg_Node(const Csg* c, uint k) { return (c->node[k >> 2] >> ((k & 3u) * 8u)) & 255u; }
 
-/* The solid's membership for the leaves' memberships `mask` (bit i: leaf
- * i): the postfix expression on a stack of bits (at most 32 deep: one per
- * leaf). */
-CR_FUNC uint Csg_Eval(const Csg* c, uint mask)
-{
-  uint st = 0u;
-  for (uint k = 0u; k < c->nNodes; ++k) {
-    const uint n = Csg_Node(c, k);
-    if (n < CR_CSG_UNION) {
-      st = (st << 1) | ((mask >> n) & 1u);
-    } else {
-      const uint b = st & 1u, a = (st >> 1) & 1u;
-      const uint x = n == CR_CSG_UNION ? (a | b) : n == CR_CSG_INTERSECTION ? (a & b) : (a & (b ^ 1u));
-      st = ((st >> 2) << 1) | x;
-    }
-  }
-  return st & 1u;
-}
-
 /* A folded expression's extra operator: the complement of the top. */
 #define CR_CSG_NOT 67u
 
-/* Csg_Eval of a folded program (Csg_Fold): n nodes of prog. */
+/* The solid's membership for the leaves' memberships `mask` (bit i: leaf
+ * i), by a program of Csg_Fold (n nodes of prog): the postfix expression on
+ * a stack of bits (at most 32 deep: one per leaf). */
 CR_FUNC uint Csg_EvalProgram(const uint* prog, uint n, uint mask)
 {
   uint st = 0u;

@@ -98,7 +98,9 @@ bool Member(const Csg& c, const glm::dvec3& x)
   std::uint32_t mask = 0;
   for (std::uint32_t i = 0; i < c.nLeaves; ++i)
     if (VisitLeaf(c, i, [&](const auto& leaf) { return Inside(leaf, x); })) mask |= 1u << i;
-  return csg_fp64::Csg_Eval(&c, mask) != 0;
+  std::uint32_t prog[CR_CSG_MAX_NODES];
+  const std::uint32_t all = c.nLeaves >= 32 ? ~0u : (1u << c.nLeaves) - 1u;
+  return csg_fp64::Csg_EvalProgram(prog, csg_fp64::Csg_Fold(&c, all, 0u, prog), mask) != 0;
 }
 
 // The signed distance of leaf i at x (negative inside; exact for the
