@@ -1,6 +1,7 @@
 #include "host/render/renderer.h"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 
@@ -10,7 +11,9 @@
 
 #include "host/core/error.h"
 #include "host/rays/raygen.h"
+#include "host/render/integrator.h"
 #include "host/render/progress.h"
+#include "host/render/sampling.h"
 #include "host/scene/camera.h"
 #include "host/scene/surface.h"
 
@@ -28,318 +31,200 @@ void to_json(nlohmann::json& j, const RenderStats& s)
                      {"shadow_hits", s.shadowHits},
                      {"total_internal_reflections", s.totalInternalReflections},
                      {"self_shadowed", s.selfShadowed},
+                     {"diffuse_rays", s.diffuseRays},
+                     {"diffuse_hits", s.diffuseHits},
+                     {"path_rays", s.pathRays},
+                     {"path_hits", s.pathHits},
+                     {"passes", s.passes},
+                     {"time_limited", s.timeLimited},
                      {"trace_ms", s.traceMs},
                      {"shade_ms", s.shadeMs},
                      {"total_ms", s.totalMs}};
 }
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
-
-enum class RayType : std::uint8_t { Eye, Reflection, Refraction };
-
-// A ray of the current bounce and what it carries back to its sample.
-struct PathRay {
-  RayRecord ray;
-  glm::vec3 weight;
-  std::uint32_t sample;
-  std::uint8_t depth;
-  RayType type;
-};
-
-// A shadow ray and the light it would deliver if unblocked.
-struct ShadowRay {
-  RayRecord ray;
-  glm::vec3 light;
-  std::uint32_t sample;
-  std::uint32_t sourcePrim;
-  std::uint8_t sourceOpaque;  // only opaque surfaces can be self-shadowed in error
-  std::uint8_t valid;
-};
-
-RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
+DiffuseGather ParseDiffuse(const std::string& s)
 {
-  RayRecord r;
-  for (int a = 0; a < 3; ++a) {
-    r.org[a] = o[a];
-    r.dir[a] = d[a];
+  DiffuseGather g;
+  const auto colon = s.find(':');
+  const std::string kind = s.substr(0, colon);
+  int n = 0;
+  bool ok = colon != std::string::npos;
+  if (ok) {
+    const char* b = s.data() + colon + 1;
+    const char* e = s.data() + s.size();
+    auto [p, ec] = std::from_chars(b, e, n);
+    ok = ec == std::errc() && p == e && b != e;
   }
-  r.tmin = 0.0f;
-  r.tmax = tmax;
-  return r;
+  if (kind == "cube" && ok && n >= 1 && n <= 32) {
+    g.kind = DiffuseGather::Kind::Cube;
+  } else if (kind == "cosine" && ok && n >= 1 && n <= 4096) {
+    g.kind = DiffuseGather::Kind::Cosine;
+  } else {
+    throw InputError(fmt::format("--diffuse '{}': expected cube:N (N in 1..32) or cosine:K (K in 1..4096)", s));
+  }
+  g.n = n;
+  return g;
 }
 
-class Shader {
- public:
-  Shader(const Scene& scene, const RenderOptions& opt) : scene_(scene), opt_(opt)
-  {
-    const double nl = double(std::max<std::size_t>(1, scene.lights.size()));
-    intensity_ = float(std::sqrt(nl) / (2.0 * nl));
-    twoSidedOpaque_ = opt.sides == Sides::Two || (opt.sides == Sides::Auto && scene.CountKind(PrimKind::kPatch, CR_PRIM_TRIANGLE) > 0);
+double RenderContext::Random(std::uint64_t sample, std::uint64_t stream) const
+{
+  return ToUnit(HashRandom(opt.seed, stream, sample));
+}
+
+glm::dvec2 RenderContext::Stratified(std::uint64_t point, int k, std::uint64_t stream) const
+{
+  const std::uint64_t s = Sample(point, k);
+  const std::uint32_t order = std::uint32_t(HashRandom(opt.seed, stream + 1, point));
+  const std::uint32_t stratum = Permute(std::uint32_t(k), std::uint32_t(opt.spp), order);
+  const int kx = int(stratum) % sx, ky = int(stratum) / sx;
+  return {(kx + Random(s, stream)) / sx, std::min(0.99999999999999989, (ky + Random(s, stream + 2)) / sy)};
+}
+
+RayRecord RenderContext::CameraRay(std::uint64_t point, int k) const
+{
+  const int x = int(point % std::uint64_t(cw)), y = int(point / std::uint64_t(cw));
+  const std::uint64_t s = Sample(point, k);
+  double px, py;
+  if (opt.spd) {
+    px = x - 0.5;
+    py = y - 0.5;
+  } else if (opt.spp == 1) {
+    px = x;
+    py = y;
+  } else {
+    const int kx = k % sx, ky = k / sx;
+    px = x - 0.5 + (kx + ToUnit(HashRandom(opt.seed, 41, s))) / sx;
+    py = y - 0.5 + (ky + ToUnit(HashRandom(opt.seed, 42, s))) / sy;
   }
+  if (!(frame.aperture > 0.0)) return PrimaryRay(frame, px, py);
+  const glm::dvec2 lens = Stratified(point, k, 43);
+  return LensRay(frame, px, py, lens.x, lens.y);
+}
 
-  // Shades one hit: returns the local colour (ambient, or background on a
-  // miss) and fills up to nLights shadow rays and up to two spawned rays.
-  glm::vec3 Shade(const PathRay& pr, const HitRecord& hit, ShadowRay* shadows, PathRay* spawned, int& nSpawned,
-                  std::uint8_t& tir) const
-  {
-    nSpawned = 0;
-    tir = 0;
-    const std::size_t nl = scene_.lights.size();
-    for (std::size_t l = 0; l < nl; ++l) shadows[l].valid = 0;
-    if (hit.prim == CR_NO_HIT) return pr.weight * scene_.background;
-
-    const std::uint32_t g = hit.prim;
-    const std::uint32_t id = scene_.IdOfHit(g, hit.u);
-    const PrimInfo& info = scene_.prims[id];
-    const Material& m = scene_.materials[info.material];
-    const glm::dvec3 o(pr.ray.org[0], pr.ray.org[1], pr.ray.org[2]);
-    const glm::dvec3 dd(pr.ray.dir[0], pr.ray.dir[1], pr.ray.dir[2]);
-    const SurfacePoint sp = SurfaceAt(scene_, g, o + double(hit.t) * dd, hit.u, hit.v);
-    const glm::vec3 p = sp.p;
-    const float offset = opt_.robustOffsets ? sp.robustError : sp.error;
-    const glm::vec3 d = glm::normalize(glm::vec3(dd));
-    glm::vec3 ng = sp.ng, ns = sp.ns;
-    const glm::vec3 outward = ng;
-    const bool transmitter = m.transmittance > 0.0f;
-    // One-sided opaque surfaces keep their outward normal; two-sided ones
-    // (transmitters, and every surface of a double-sided scene) face the ray.
-    if ((transmitter || twoSidedOpaque_) && glm::dot(ng, d) > 0.0f) {
-      ng = -ng;
-      ns = -ns;
-    }
-
-    const glm::vec3 base = m.color * m.kd;
-    glm::vec3 local = pr.weight * intensity_ * base;  // ambient
-
-    // Direct light: one shadow ray per light the shading normal faces.
-    for (std::size_t l = 0; l < nl; ++l) {
-      const Light& light = scene_.lights[l];
-      glm::vec3 L = light.position - p;
-      const float dist = glm::length(L);
-      if (!(dist > 0.0f)) continue;
-      L /= dist;
-      const float nDotL = glm::dot(ns, L);
-      if (nDotL <= 0.0f) continue;
-      glm::vec3 c = base * nDotL;
-      if (m.ks > 0.0f) {
-        glm::vec3 r = 2.0f * glm::dot(ns, L) * ns - L;
-        float rv = std::max(0.0f, glm::dot(r, -d));
-        c += glm::vec3(m.ks * std::pow(rv, m.shine));
-      }
-      const glm::vec3 side = glm::dot(ng, L) >= 0.0f ? ng : -ng;
-      const glm::vec3 so = OffsetRayOrigin(p, offset, side);
-      ShadowRay& s = shadows[l];
-      s.ray = MakeRay(so, light.position - so, 1.0f);
-      s.light = pr.weight * intensity_ * light.color * c;
-      s.sample = pr.sample;
-      s.sourcePrim = id;
-      s.sourceOpaque = transmitter ? 0 : 1;
-      s.valid = (s.ray.dir[0] != 0.0f || s.ray.dir[1] != 0.0f || s.ray.dir[2] != 0.0f) ? 1 : 0;
-    }
-
-    if (pr.depth >= opt_.maxDepth) return local;
-
-    // Refraction (Snell) with total internal reflection.
-    float kr = m.ks, kt = m.transmittance;
-    glm::vec3 refrDir(0.0f);
-    bool refract = false;
-    if (transmitter) {
-      float cosi = -glm::dot(d, outward);
-      glm::vec3 n = outward;
-      float eta = 1.0f / (m.ior > 0.0f ? m.ior : 1.0f);
-      if (cosi < 0.0f) {  // leaving the medium
-        cosi = -cosi;
-        n = -outward;
-        eta = 1.0f / eta;
-      }
-      const float k = 1.0f - eta * eta * (1.0f - cosi * cosi);
-      if (k < 0.0f) {
-        tir = 1;
-        kr += kt;  // total internal reflection: the transmitted share reflects
-      } else {
-        refract = true;
-        refrDir = glm::normalize(eta * d + (eta * cosi - std::sqrt(k)) * n);
-        if (opt_.fresnel && !opt_.spd) {
-          const float n1 = 1.0f, n2 = m.ior > 0.0f ? m.ior : 1.0f;
-          const float r0 = ((n1 - n2) / (n1 + n2)) * ((n1 - n2) / (n1 + n2));
-          const float c = eta > 1.0f ? std::sqrt(k) : cosi;  // the cosine on the optically thinner side
-          const float f = r0 + (1.0f - r0) * std::pow(1.0f - c, 5.0f);
-          kr = kr + kt * f;
-          kt = kt * (1.0f - f);
-        }
-      }
-    }
-    // SPD: reflective *and transmitting* surfaces spawn reflection rays (the
-    // SPD transmitters have Ks = 0); outside SPD mode a ray that can carry no
-    // light is not cast.
-    if (m.ks > 0.0f || transmitter) {
-      if (!opt_.spd && kr <= 0.0f) goto refraction;
-      glm::vec3 rd = d - 2.0f * glm::dot(d, ns) * ns;
-      const glm::vec3 side = glm::dot(rd, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = OffsetRayOrigin(p, offset, side);
-      spawned[nSpawned++] = PathRay{MakeRay(ro, rd, INFINITY), pr.weight * kr * glm::vec3(1.0f), pr.sample,
-                                    std::uint8_t(pr.depth + 1), RayType::Reflection};
-    }
-  refraction:
-    if (refract) {
-      const glm::vec3 side = glm::dot(refrDir, ng) >= 0.0f ? ng : -ng;
-      const glm::vec3 ro = OffsetRayOrigin(p, offset, side);
-      spawned[nSpawned++] = PathRay{MakeRay(ro, refrDir, INFINITY), pr.weight * kt * m.color, pr.sample,
-                                    std::uint8_t(pr.depth + 1), RayType::Refraction};
-    }
-    return local;
+RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
+                           const LightSample& s)
+{
+  const glm::vec3 o = OffsetRayOrigin(p, offset, side);
+  // The light's float surface lies within SurfacePoint::error of s.p.
+  double scale;
+  if (l.kind == AreaLightKind::kSphere) {
+    scale = std::max({std::fabs(l.c.x), std::fabs(l.c.y), std::fabs(l.c.z)}) + l.radius;
+  } else {
+    scale = 0.0;
+    for (const glm::dvec3& q : {l.c, l.c + l.u, l.c + l.v, l.c + l.u + l.v})
+      scale = std::max({scale, std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
   }
-
- private:
-  const Scene& scene_;
-  const RenderOptions& opt_;
-  float intensity_ = 1.0f;
-  bool twoSidedOpaque_ = false;
-};
-
-}  // namespace
+  const glm::vec3 q(s.p);
+  const double qn = std::max({std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
+  const float err = float(0x1p-19 * scale + 0x1p-22 * qn) * 2.0f;
+  const glm::vec3 toward = glm::dot(glm::dvec3(o) - s.p, s.n) >= 0.0 ? glm::vec3(s.n) : -glm::vec3(s.n);
+  const glm::vec3 end = OffsetRayOrigin(q, err, toward);
+  return MakeRay(o, end - o, 1.0f);
+}
 
 Image Render(const Scene& scene, Tracer& tracer, const RenderOptions& optIn, RenderStats* statsOut)
 {
+  using Clock = std::chrono::steady_clock;
+  auto ms = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   RenderOptions opt = optIn;
   if (opt.spd) {
     opt.spp = 1;
     opt.maxDepth = 5;
     opt.fresnel = false;
+    if (opt.integrator != Integrator::Whitted || opt.diffuse.kind != DiffuseGather::Kind::None)
+      throw InputError("--spd is the Whitted integrator without --diffuse");
   }
-  if (opt.spp < 1 || opt.spp > 4096) throw InputError(fmt::format("--spp {} is not in 1..4096", opt.spp));
+  if (opt.spp < 1 || opt.spp > 65536) throw InputError(fmt::format("--spp {} is not in 1..65536", opt.spp));
   if (opt.maxDepth < 1 || opt.maxDepth > 64) throw InputError(fmt::format("--depth {} is not in 1..64", opt.maxDepth));
+  if (opt.writeEvery < 0) throw InputError(fmt::format("--write-every {} is negative", opt.writeEvery));
+  if (!(opt.timeLimit >= 0.0)) throw InputError(fmt::format("--time-limit {} is negative", opt.timeLimit));
+  if (opt.integrator == Integrator::Path && opt.diffuse.kind != DiffuseGather::Kind::None)
+    throw InputError("--diffuse belongs to the whitted integrator (the path tracer samples all interreflection)");
   const int w = opt.width > 0 ? opt.width : scene.camera.width;
   const int h = opt.height > 0 ? opt.height : scene.camera.height;
-  const CameraFrame frame = MakeCameraFrame(scene.camera, w, h);
-  // Samples: SPD pixel corners, or spp stratified samples per pixel.
-  const int cw = opt.spd ? w + 1 : w, ch = opt.spd ? h + 1 : h;
-  const std::uint64_t perPixel = std::uint64_t(opt.spp);
-  const std::uint64_t nSamples = std::uint64_t(cw) * std::uint64_t(ch) * perPixel;
-  if (nSamples > (std::uint64_t(1) << 31)) throw InputError("render: too many samples (size x spp)");
-  const int sx = std::max(1, int(std::ceil(std::sqrt(double(opt.spp)))));
-  const int sy = (opt.spp + sx - 1) / sx;
+  RenderContext ctx{scene, opt, MakeCameraFrame(scene.camera, w, h)};
+  ctx.cw = opt.spd ? w + 1 : w;
+  ctx.ch = opt.spd ? h + 1 : h;
+  ctx.sx = std::max(1, int(std::ceil(std::sqrt(double(opt.spp)))));
+  ctx.sy = (opt.spp + ctx.sx - 1) / ctx.sx;
+  ctx.twoSidedOpaque =
+      opt.sides == Sides::Two || (opt.sides == Sides::Auto && scene.CountKind(PrimKind::kPatch, CR_PRIM_TRIANGLE) > 0);
+  {
+    const double nl = double(std::max<std::size_t>(1, scene.lights.size()));
+    ctx.intensity = float(std::sqrt(nl) / (2.0 * nl));
+    // A point light in the path tracer: the radiant intensity that gives a
+    // diffuse surface at the centre of the scene what the SPD shading gives
+    // it (the limit of render --area-lights, host/scene/area_light.h).
+    const Bounds b = scene.WorldBounds();
+    const glm::dvec3 mid = b.Empty() ? glm::dvec3(scene.camera.at) : 0.5 * (glm::dvec3(b.lo) + glm::dvec3(b.hi));
+    double d2 = 0.0;
+    for (const Light& l : scene.lights) d2 += glm::dot(glm::dvec3(l.position) - mid, glm::dvec3(l.position) - mid);
+    if (!scene.lights.empty()) d2 /= double(scene.lights.size());
+    ctx.pointIntensity = float(kPi * ctx.intensity * std::max(d2, 1e-30));
+  }
 
-  Shader shader(scene, opt);
+  const std::uint64_t nPoints = std::uint64_t(ctx.cw) * std::uint64_t(ctx.ch);
+  // Rays in flight per chunk: bounded so that the queues stay within memory.
+  const std::uint64_t perPoint = 2 + std::uint64_t(opt.diffuse.Rays()) + scene.lights.size() + scene.areaLights.size();
+  const std::uint64_t kChunk = std::max<std::uint64_t>(4096, (std::uint64_t(1) << 21) / perPoint);
   RenderStats st;
-  std::vector<glm::vec3> accum(nSamples, glm::vec3(0.0f));
-  const std::size_t nl = scene.lights.size();
-  const std::uint64_t kChunk = std::uint64_t(1) << 18;
-  Progress progress(nSamples, opt.progress);
+  std::vector<glm::vec3> accum(nPoints, glm::vec3(0.0f)), pass(nPoints);
+  Progress progress(nPoints * std::uint64_t(opt.spp), opt.progress);
   const auto t0 = Clock::now();
-
-  std::vector<PathRay> queue, next;
-  std::vector<HitRecord> hits;
-  std::vector<ShadowRay> shadows;
-  std::vector<PathRay> spawned;
-  std::vector<int> nSpawned;
-  std::vector<std::uint8_t> tirs;
-  std::vector<glm::vec3> local;
-  std::vector<RayRecord> batch;
   std::uint64_t raysCast = 0;
 
-  for (std::uint64_t begin = 0; begin < nSamples; begin += kChunk) {
-    const std::uint64_t end = std::min(nSamples, begin + kChunk);
-    queue.resize(end - begin);
-    tbb::parallel_for(begin, end, [&](std::uint64_t s) {
-      const std::uint64_t pixel = s / perPixel, k = s % perPixel;
-      const int x = int(pixel % std::uint64_t(cw)), y = int(pixel / std::uint64_t(cw));
-      double px, py;
-      if (opt.spd) {
-        px = x - 0.5;
-        py = y - 0.5;
-      } else if (opt.spp == 1) {
-        px = x;
-        py = y;
-      } else {
-        const int kx = int(k) % sx, ky = int(k) / sx;
-        px = x - 0.5 + (kx + ToUnit(HashRandom(opt.seed, 41, s))) / sx;
-        py = y - 0.5 + (ky + ToUnit(HashRandom(opt.seed, 42, s))) / sy;
+  auto makeImage = [&](int passes) {
+    Image img;
+    img.width = w;
+    img.height = h;
+    img.rgb.assign(std::size_t(w) * h * 3, 0.0f);
+    tbb::parallel_for(0, h, [&](int y) {
+      for (int x = 0; x < w; ++x) {
+        glm::vec3 c(0.0f);
+        if (opt.spd) {
+          const std::size_t cw = std::size_t(ctx.cw);
+          c = 0.25f * (accum[std::size_t(y) * cw + x] + accum[std::size_t(y) * cw + x + 1] +
+                       accum[std::size_t(y + 1) * cw + x] + accum[std::size_t(y + 1) * cw + x + 1]);
+        } else {
+          c = accum[std::size_t(y) * w + x] / float(passes);
+        }
+        for (int a = 0; a < 3; ++a) img.rgb[(std::size_t(y) * w + x) * 3 + a] = c[a];
       }
-      queue[s - begin] = PathRay{PrimaryRay(frame, px, py), glm::vec3(1.0f), std::uint32_t(s), 1, RayType::Eye};
     });
-    while (!queue.empty()) {
-      const std::size_t n = queue.size();
-      batch.resize(n);
-      for (std::size_t i = 0; i < n; ++i) batch[i] = queue[i].ray;
-      auto ta = Clock::now();
-      tracer.Trace(batch, hits, false, nullptr);
-      auto tb = Clock::now();
-      st.traceMs += Ms(ta, tb);
-      raysCast += n;
+    return img;
+  };
 
-      shadows.resize(n * nl);
-      spawned.resize(n * 2);
-      nSpawned.resize(n);
-      tirs.resize(n);
-      local.resize(n);
-      tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-        local[i] = shader.Shade(queue[i], hits[i], nl ? &shadows[i * nl] : nullptr, &spawned[i * 2], nSpawned[i], tirs[i]);
-      });
-      for (std::size_t i = 0; i < n; ++i) {
-        accum[queue[i].sample] += local[i];
-        st.totalInternalReflections += tirs[i];
-        const bool hit = hits[i].prim != CR_NO_HIT;
-        switch (queue[i].type) {
-          case RayType::Eye: st.eyeRays++, st.eyeHits += hit; break;
-          case RayType::Reflection: st.reflectionRays++, st.reflectionHits += hit; break;
-          case RayType::Refraction: st.refractionRays++, st.refractionHits += hit; break;
-        }
+  for (int k = 0; k < opt.spp; ++k) {
+    bool aborted = false;
+    for (std::uint64_t begin = 0; begin < nPoints; begin += kChunk) {
+      const std::uint64_t end = std::min(nPoints, begin + kChunk);
+      std::fill(pass.begin() + std::ptrdiff_t(begin), pass.begin() + std::ptrdiff_t(end), glm::vec3(0.0f));
+      if (opt.integrator == Integrator::Path)
+        PathChunk(ctx, tracer, begin, end, k, pass.data() + begin, st, raysCast);
+      else
+        WhittedChunk(ctx, tracer, begin, end, k, pass.data() + begin, st, raysCast);
+      progress.Update(std::uint64_t(k) * nPoints + end, raysCast);
+      if (k > 0 && opt.timeLimit > 0.0 && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit && end < nPoints) {
+        aborted = true;  // the pass in flight is discarded
+        break;
       }
-      // Shadow rays of this bounce, compacted, then traced as one any-hit batch.
-      std::size_t ns = 0;
-      for (std::size_t i = 0; i < n * nl; ++i)
-        if (shadows[i].valid) shadows[ns++] = shadows[i];
-      shadows.resize(ns);
-      auto tc = Clock::now();
-      st.shadeMs += Ms(tb, tc);
-      if (ns) {
-        batch.resize(ns);
-        for (std::size_t i = 0; i < ns; ++i) batch[i] = shadows[i].ray;
-        tracer.Trace(batch, hits, true, nullptr);
-        st.shadowRays += ns;
-        raysCast += ns;
-        for (std::size_t i = 0; i < ns; ++i) {
-          if (hits[i].prim == CR_NO_HIT) {
-            accum[shadows[i].sample] += shadows[i].light;
-          } else {
-            st.shadowHits++;
-            if (shadows[i].sourceOpaque && scene.IdOfHit(hits[i].prim, hits[i].u) == shadows[i].sourcePrim) st.selfShadowed++;
-          }
-        }
-      }
-      st.traceMs += Ms(tc, Clock::now());
-      next.clear();
-      for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < nSpawned[i]; ++k) next.push_back(spawned[i * 2 + k]);
-      std::swap(queue, next);
     }
-    progress.Update(end, raysCast);
+    if (aborted) {
+      st.timeLimited = true;
+      break;
+    }
+    for (std::uint64_t i = 0; i < nPoints; ++i) accum[i] += pass[i];
+    st.passes = k + 1;
+    if (opt.onImage && opt.writeEvery > 0 && st.passes % opt.writeEvery == 0 && st.passes < opt.spp)
+      opt.onImage(makeImage(st.passes), st.passes);
+    if (opt.timeLimit > 0.0 && st.passes < opt.spp && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit) {
+      st.timeLimited = true;
+      break;
+    }
   }
   progress.Finish(raysCast);
-
-  Image img;
-  img.width = w;
-  img.height = h;
-  img.rgb.assign(std::size_t(w) * h * 3, 0.0f);
-  tbb::parallel_for(0, h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      glm::vec3 c(0.0f);
-      if (opt.spd) {
-        c = 0.25f * (accum[std::size_t(y) * cw + x] + accum[std::size_t(y) * cw + x + 1] +
-                     accum[std::size_t(y + 1) * cw + x] + accum[std::size_t(y + 1) * cw + x + 1]);
-      } else {
-        const std::size_t p0 = (std::size_t(y) * w + x) * perPixel;
-        for (std::uint64_t k = 0; k < perPixel; ++k) c += accum[p0 + k];
-        c /= float(perPixel);
-      }
-      for (int a = 0; a < 3; ++a) img.rgb[(std::size_t(y) * w + x) * 3 + a] = c[a];
-    }
-  });
-  st.totalMs = Ms(t0, Clock::now());
+  Image img = makeImage(st.passes);
+  st.totalMs = ms(t0, Clock::now());
   if (statsOut) *statsOut = st;
   return img;
 }

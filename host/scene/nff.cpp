@@ -203,8 +203,8 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
     const long line = tok->line;
     const std::string_view kw = tok->text;
     anyStatement = true;
-    if (viewOnly && kw != "v" && kw != "b" && kw != "l")
-      lx.Fail(line, fmt::format("'{}' statement in a view file (only v, b, l and comments belong there)", kw));
+    if (viewOnly && kw != "v" && kw != "b" && kw != "l" && kw != "lens")
+      lx.Fail(line, fmt::format("'{}' statement in a view file (only v, lens, b, l and comments belong there)", kw));
     if (kw == "v") {
       Camera cam;
       lx.Keyword("from", line);
@@ -233,6 +233,14 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
       cam.height = int(h);
       scene.camera = cam;
       scene.hasCamera = true;
+    } else if (kw == "lens") {
+      if (!scene.hasCamera) lx.Fail(line, "'lens' before the 'v' block it belongs to");
+      const double a = lx.Number("lens", line, "the aperture radius");
+      const double f = lx.Number("lens", line, "the focal distance");
+      if (!(a >= 0.0) || !std::isfinite(a)) lx.Fail(line, fmt::format("'lens': aperture radius {} is negative", a));
+      if (!(f > 0.0) || !std::isfinite(f)) lx.Fail(line, fmt::format("'lens': focal distance {} is not > 0", f));
+      scene.camera.aperture = float(a);
+      scene.camera.focal = float(f);
     } else if (kw == "b") {
       scene.background = F(Vec(lx, "b", line, "a background colour component"));
     } else if (kw == "l") {
@@ -246,7 +254,7 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
     } else {
       // Geometry: the statement of some primitive type (host/prims/).
       LexerStatement st(lx, kw, line, material);
-      if (!ReadGeometry(st, scene)) lx.Fail(line, fmt::format("unknown statement '{}'", kw));
+      if (!ParseAreaLight(st, scene) && !ReadGeometry(st, scene)) lx.Fail(line, fmt::format("unknown statement '{}'", kw));
     }
   }
   if (!anyStatement) throw InputError(name, 0, viewOnly ? "empty view file" : "empty scene file");

@@ -18,6 +18,7 @@
 #include <glm/glm.hpp>
 
 #include "kernels/types.h"
+#include "host/scene/area_light.h"
 
 namespace cr {
 
@@ -29,6 +30,10 @@ struct Camera {
   float hither = 0.0f;  // distance of the near plane along the view direction
   int width = 512;
   int height = 512;
+  // Thin lens (NFF extension `lens aperture_radius focal_distance`, docs/FORMATS.md):
+  // aperture 0 is the pinhole.
+  float aperture = 0.0f;
+  float focal = 1.0f;
 };
 
 struct Light {
@@ -45,6 +50,8 @@ struct Material {
   float shine = 0.0f;
   float transmittance = 0.0f;
   float ior = 1.0f;
+  glm::vec3 emission{0.0f};  // radiance emitted (an area light's, host/scene/area_light.h)
+  int light = -1;            // index of its area light in Scene::areaLights, or -1
 };
 
 // What a geometry statement is: one piece of its primitive type (NFF `s`
@@ -99,6 +106,7 @@ struct Scene {
   bool hasCamera = false;
   glm::vec3 background{0.0f};
   std::vector<Light> lights;
+  std::vector<AreaLight> areaLights;  // NFF `la`, `ls` (each also one primitive id)
   std::vector<Material> materials;  // materials[0] is the default
   std::vector<PrimInfo> prims;      // indexed by primitive id
 

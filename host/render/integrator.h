@@ -1,0 +1,62 @@
+// What the integrators of host/render/ share (internal to the renderer):
+// the camera samples of a pass, stratified random numbers, and shadow rays
+// towards a point sampled on an area light.
+#pragma once
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "host/render/renderer.h"
+#include "host/scene/camera.h"
+
+namespace cr {
+
+struct RenderContext {
+  const Scene& scene;
+  const RenderOptions& opt;  // normalised by Render (spd, depth)
+  CameraFrame frame;
+  int cw = 0, ch = 0;  // sample points per row and column (SPD: the corners)
+  int sx = 1, sy = 1;  // strata of a pixel's spp samples
+  bool twoSidedOpaque = false;
+  float intensity = 1.0f;      // the SPD's point-light intensity
+  float pointIntensity = 1.0f;  // a point light's radiant intensity per unit colour (path)
+
+  // Sample k of point `point`: its index in the seeded sequences.
+  std::uint64_t Sample(std::uint64_t point, int k) const { return point * std::uint64_t(opt.spp) + std::uint64_t(k); }
+  double Random(std::uint64_t sample, std::uint64_t stream) const;
+  // A point of [0, 1)^2 in stratum k of the pixel's sx x sy strata, the
+  // strata of each point and stream visited in their own hashed order.
+  glm::dvec2 Stratified(std::uint64_t point, int k, std::uint64_t stream) const;
+  // The camera ray of sample k at point `point` (pixel jitter, lens).
+  RayRecord CameraRay(std::uint64_t point, int k) const;
+};
+
+// A ray of one pass's chunk [begin, end) of points: each integrator traces
+// sample k of every point and adds what it carries back into
+// out[point - begin].
+void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, std::uint64_t end, int k,
+                  glm::vec3* out, RenderStats& st, std::uint64_t& rays);
+void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, std::uint64_t end, int k, glm::vec3* out,
+               RenderStats& st, std::uint64_t& rays);
+
+// A shadow ray from p (offset by `offset` to the side of unit `side`) to the
+// point s sampled on light l, that point moved off the light towards p by
+// the float error of l's surface, so that the ray ends before the light.
+RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
+                           const LightSample& s);
+
+// A ray from o along d with [0, tmax].
+inline RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
+{
+  RayRecord r;
+  for (int a = 0; a < 3; ++a) {
+    r.org[a] = o[a];
+    r.dir[a] = d[a];
+  }
+  r.tmin = 0.0f;
+  r.tmax = tmax;
+  return r;
+}
+
+}  // namespace cr
