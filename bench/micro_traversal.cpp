@@ -31,7 +31,7 @@ void BM_TraversalStep(benchmark::State& state, Backend backend, AccelKind accel,
     oneThread = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
   const Scene& scene = BenchScene(sceneName);
   const auto& rays = BenchRays(sceneName, kind);
-  const bool occlusion = kind == RayKind::Shadow;
+  const bool occlusion = IsOcclusionKind(kind);
   TraceConfig cfg;
   cfg.backend = backend;
   cfg.accel = accel;

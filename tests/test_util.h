@@ -153,7 +153,7 @@ inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int siz
   return GenerateRays(scene, CachedReference(scene), g);
 }
 
-inline bool IsOcclusion(RayKind kind) { return kind == RayKind::Shadow; }
+inline bool IsOcclusion(RayKind kind) { return IsOcclusionKind(kind); }
 
 // The rays whose answers differ: bit for bit, or for occlusion hit against
 // miss (which primitive answers an any-hit query is the traversal's).

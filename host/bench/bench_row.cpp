@@ -12,7 +12,7 @@ void to_json(nlohmann::json& j, const Row& r)
                      {"prims", r.prims},
                      {"pieces", r.pieces},
                      {"kind", RayKindName(r.kind)},
-                     {"query", r.kind == RayKind::Shadow ? "occlusion" : "closest"},
+                     {"query", IsOcclusionKind(r.kind) ? "occlusion" : "closest"},
                      {"rays", r.rays},
                      {"label", r.combo.Label()},
                      {"backend", BackendName(r.combo.backend)},

@@ -154,7 +154,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         row.kind = o.kinds[ki];
         const RaySet& set = sets[ki];
         row.rays = set.rays.size();
-        const bool occlusion = row.kind == RayKind::Shadow;
+        const bool occlusion = IsOcclusionKind(row.kind);
         if (!skip.empty()) {
           row.note = skip;
         } else if (set.rays.empty()) {

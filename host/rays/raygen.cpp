@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "host/core/error.h"
+#include "host/render/integrator.h"
 #include "host/scene/camera.h"
 #include "host/scene/surface.h"
 
@@ -18,7 +19,9 @@ RayKind ParseRayKind(const std::string& s)
   if (s == "shadow") return RayKind::Shadow;
   if (s == "diffuse") return RayKind::Diffuse;
   if (s == "random") return RayKind::Random;
-  throw InputError(fmt::format("unknown ray kind '{}' (expected primary, shadow, diffuse or random)", s));
+  if (s == "soft") return RayKind::Soft;
+  if (s == "path") return RayKind::Path;
+  throw InputError(fmt::format("unknown ray kind '{}' (expected primary, shadow, diffuse, random, soft or path)", s));
 }
 
 const char* RayKindName(RayKind k)
@@ -28,6 +31,8 @@ const char* RayKindName(RayKind k)
     case RayKind::Shadow: return "shadow";
     case RayKind::Diffuse: return "diffuse";
     case RayKind::Random: return "random";
+    case RayKind::Soft: return "soft";
+    case RayKind::Path: return "path";
   }
   return "?";
 }
@@ -57,9 +62,31 @@ RayRecord Make(const glm::vec3& o, const glm::vec3& d, float tmin, float tmax)
   return r;
 }
 
+// A cosine-weighted direction about ng (Malley's method).
+glm::dvec3 CosineAbout(const glm::dvec3& ng, std::uint64_t seed, std::uint64_t stream, std::uint64_t sample)
+{
+  double u1 = ToUnit(HashRandom(seed, stream, 2 * sample)), u2 = ToUnit(HashRandom(seed, stream, 2 * sample + 1));
+  double rad = std::sqrt(u1), phi = 2.0 * 3.14159265358979323846 * u2;
+  glm::dvec3 a = std::fabs(ng.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+  glm::dvec3 t1 = glm::normalize(glm::cross(ng, a)), t2 = glm::cross(ng, t1);
+  return glm::normalize(rad * std::cos(phi) * t1 + rad * std::sin(phi) * t2 + std::sqrt(std::max(0.0, 1.0 - u1)) * ng);
+}
+
+// The area lights soft-shadow rays aim at: the scene's, or spheres around
+// its point lights.
+std::vector<AreaLight> SoftLights(const Scene& scene)
+{
+  if (!scene.areaLights.empty() || scene.lights.empty()) return scene.areaLights;
+  const Bounds b = scene.WorldBounds();
+  const double radius = b.Empty() ? 1.0 : 0.01 * glm::length(glm::dvec3(b.hi) - glm::dvec3(b.lo));
+  std::vector<AreaLight> out;
+  for (const Light& l : scene.lights) out.push_back(SphereLight(glm::dvec3(l.position), radius, l.color));
+  return out;
+}
+
 // Secondary rays of one primary sample.
 void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind, const RayRecord& primary,
-               std::uint64_t seed, std::uint64_t sample, std::vector<RayRecord>& out)
+               std::uint64_t seed, std::uint64_t sample, const std::vector<AreaLight>& soft, std::vector<RayRecord>& out)
 {
   ref::DRay r = ref::MakeRay(primary);
   ref::RefHit h = tr.Intersect(r);
@@ -79,16 +106,32 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
       if (d == glm::vec3(0.0f)) continue;
       out.push_back(Make(o, d, 0.0f, 1.0f));
     }
+  } else if (kind == RayKind::Soft) {
+    for (std::size_t l = 0; l < soft.size(); ++l) {
+      const LightSample ls = SampleAreaLight(soft[l], p, ToUnit(HashRandom(seed, 12 + 2 * l, sample)),
+                                             ToUnit(HashRandom(seed, 13 + 2 * l, sample)));
+      if (!(ls.pdf > 0.0) || glm::dot(ns, ls.p - p) <= 0.0) continue;
+      const glm::vec3 side = ToF(glm::dot(ng, ls.p - p) >= 0.0 ? ng : -ng);
+      const RayRecord sr = ShadowRayToLight(sp.p, sp.error, side, soft[l], ls);
+      if (sr.dir[0] != 0.0f || sr.dir[1] != 0.0f || sr.dir[2] != 0.0f) out.push_back(sr);
+    }
   } else {
-    // Cosine-weighted direction about ng (Malley's method).
-    double u1 = ToUnit(HashRandom(seed, 11, 2 * sample)), u2 = ToUnit(HashRandom(seed, 11, 2 * sample + 1));
-    double rad = std::sqrt(u1), phi = 2.0 * 3.14159265358979323846 * u2;
-    glm::dvec3 a = std::fabs(ng.x) < 0.6 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
-    glm::dvec3 t1 = glm::normalize(glm::cross(ng, a)), t2 = glm::cross(ng, t1);
-    glm::dvec3 d = rad * std::cos(phi) * t1 + rad * std::sin(phi) * t2 + std::sqrt(std::max(0.0, 1.0 - u1)) * ng;
-    glm::vec3 df = ToF(glm::normalize(d));
+    glm::vec3 df = ToF(CosineAbout(ng, seed, 11, sample));
     if (df == glm::vec3(0.0f)) return;
-    out.push_back(Make(OffsetRayOrigin(sp.p, sp.error, ToF(ng)), df, 0.0f, INFINITY));
+    RayRecord dr = Make(OffsetRayOrigin(sp.p, sp.error, ToF(ng)), df, 0.0f, INFINITY);
+    if (kind == RayKind::Path) {
+      // Follow it to its hit and bounce once more.
+      ref::DRay r2 = ref::MakeRay(dr);
+      ref::RefHit h2 = tr.Intersect(r2);
+      if (!h2.Found()) return;
+      const SurfacePoint s2 = SurfaceAt(scene, h2.g, r2.o + h2.t * r2.d, h2.u, h2.v);
+      glm::dvec3 n2(s2.ng);
+      if (glm::dot(n2, r2.d) > 0.0) n2 = -n2;
+      df = ToF(CosineAbout(n2, seed, 14, sample));
+      if (df == glm::vec3(0.0f)) return;
+      dr = Make(OffsetRayOrigin(s2.p, s2.error, ToF(n2)), df, 0.0f, INFINITY);
+    }
+    out.push_back(dr);
   }
 }
 
@@ -137,6 +180,7 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
   // Shadow and diffuse: passes of primary samples (pixel centres, then
   // jittered) until enough rays exist.
   const std::uint64_t perPass = std::uint64_t(w) * std::uint64_t(h);
+  const std::vector<AreaLight> soft = opt.kind == RayKind::Soft ? SoftLights(scene) : std::vector<AreaLight>{};
   for (int pass = 0; pass < 64 && rays.size() < target; ++pass) {
     std::vector<std::vector<RayRecord>> perRow(static_cast<std::size_t>(h));
     tbb::parallel_for(0, h, [&](int y) {
@@ -145,7 +189,7 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
         const std::uint64_t sample = std::uint64_t(pass) * perPass + std::uint64_t(y) * w + x;
         double jx = pass ? ToUnit(HashRandom(opt.seed, 31, sample)) - 0.5 : 0.0;
         double jy = pass ? ToUnit(HashRandom(opt.seed, 32, sample)) - 0.5 : 0.0;
-        Secondary(scene, tr, opt.kind, PrimaryRay(frame, x + jx, y + jy), opt.seed, sample, row);
+        Secondary(scene, tr, opt.kind, PrimaryRay(frame, x + jx, y + jy), opt.seed, sample, soft, row);
       }
     });
     for (auto& row : perRow) rays.insert(rays.end(), row.begin(), row.end());
@@ -153,7 +197,7 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
   if (rays.empty())
     throw InputError(scene.path, 0,
                      fmt::format("no {} rays: no primary ray hits anything{}", RayKindName(opt.kind),
-                                 opt.kind == RayKind::Shadow ? " that faces a light" : ""));
+                                 IsOcclusionKind(opt.kind) ? " that faces a light" : ""));
   if (rays.size() < target)
     Warn(fmt::format("{}: only {} {} rays after 64 passes (asked for {})", scene.path, rays.size(),
                      RayKindName(opt.kind), target));

@@ -13,9 +13,11 @@
 
 namespace cr {
 
-enum class RayKind { Primary, Shadow, Diffuse, Random };
+enum class RayKind { Primary, Shadow, Diffuse, Random, Soft, Path };
 RayKind ParseRayKind(const std::string& s);  // InputError on unknown names
 const char* RayKindName(RayKind k);
+// Kinds traced as occlusion (any-hit) queries: shadow and soft.
+inline bool IsOcclusionKind(RayKind k) { return k == RayKind::Shadow || k == RayKind::Soft; }
 
 struct RayGenOptions {
   RayKind kind = RayKind::Primary;
@@ -28,7 +30,13 @@ struct RayGenOptions {
 // Primary: one ray per pixel centre (or corner), row-major from the top-left.
 // Shadow: from primary hits to each light the shading normal faces.
 // Diffuse: one cosine-distributed ray per primary hit about the geometric
-// normal on the viewer's side. Random: origins uniform in the scene box,
+// normal on the viewer's side. Soft: soft-shadow rays of the distributed
+// renderer, from primary hits to a point sampled on each area light the hit
+// faces (a scene without area lights: on a sphere of radius 1% of the scene's
+// diagonal around each point light, as render --area-lights makes them).
+// Path: the rays of a path's second bounce, cosine-distributed from where a
+// diffuse ray from a primary hit lands (the incoherent rays of the path
+// tracer and of --diffuse's gather rays' successors). Random: origins uniform in the scene box,
 // directions uniform on the sphere. Secondary kinds loop over jittered
 // primary passes until `count` rays exist (at most 64 passes).
 std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tracer, const RayGenOptions& opt);

@@ -53,12 +53,7 @@ glm::vec3 ReadRadiance(NffStatement& st)
 
 void AddSphereLight(Scene& scene, const glm::dvec3& c, double radius, const glm::vec3& radiance, std::uint32_t line)
 {
-  AreaLight l;
-  l.kind = AreaLightKind::kSphere;
-  l.c = glm::dvec3(glm::vec3(c));  // the traced sphere's float centre and radius
-  l.radius = double(float(radius));
-  l.area = 4.0 * kPi * l.radius * l.radius;
-  l.radiance = radiance;
+  AreaLight l = SphereLight(c, radius, radiance);
   l.prim = scene.NumPrims();
   PrimInfo info;
   info.kind = PrimKind::kShape;
@@ -72,6 +67,17 @@ void AddSphereLight(Scene& scene, const glm::dvec3& c, double radius, const glm:
 }
 
 }  // namespace
+
+AreaLight SphereLight(const glm::dvec3& c, double radius, const glm::vec3& radiance)
+{
+  AreaLight l;
+  l.kind = AreaLightKind::kSphere;
+  l.c = glm::dvec3(glm::vec3(c));  // the traced sphere's float centre and radius
+  l.radius = double(float(radius));
+  l.area = 4.0 * kPi * l.radius * l.radius;
+  l.radiance = radiance;
+  return l;
+}
 
 LightSample SampleAreaLight(const AreaLight& l, const glm::dvec3& x, double s1, double s2)
 {

@@ -55,6 +55,10 @@ double AreaLightPdf(const AreaLight& l, const glm::dvec3& x, const glm::dvec3& p
 // light's radiance, or 0 on the back of a parallelogram.
 glm::vec3 AreaLightEmission(const AreaLight& l, const glm::dvec3& dir);
 
+// A sphere light's record (centre and radius rounded to the float sphere
+// that is traced); its prim is left 0.
+AreaLight SphereLight(const glm::dvec3& centre, double radius, const glm::vec3& radiance);
+
 // Reads `la` or `ls` if st is one (returns false if not): the light, its
 // primitive and its material. InputError (file:line) for a flat
 // parallelogram, a radius <= 0 or a negative radiance.
