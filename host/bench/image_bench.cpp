@@ -15,9 +15,10 @@ namespace cr::bench {
 
 namespace {
 
-Image RenderWith(const Scene& scene, Tracer& tracer, int w, int h, int spp, double& ms, std::uint64_t& rays)
+Image RenderWith(const Scene& scene, Tracer& tracer, const RenderOptions& base, int w, int h, int spp, double& ms,
+                 std::uint64_t& rays)
 {
-  RenderOptions ro;
+  RenderOptions ro = base;
   ro.width = w;
   ro.height = h;
   ro.spp = spp;
@@ -25,7 +26,7 @@ Image RenderWith(const Scene& scene, Tracer& tracer, int w, int h, int spp, doub
   const auto t0 = std::chrono::steady_clock::now();
   Image img = Render(scene, tracer, ro, &st);
   ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  rays = st.eyeRays + st.reflectionRays + st.refractionRays + st.shadowRays;
+  rays = st.eyeRays + st.reflectionRays + st.refractionRays + st.shadowRays + st.diffuseRays + st.pathRays;
   return img;
 }
 
@@ -46,6 +47,7 @@ void to_json(nlohmann::json& j, const ImageRow& r)
 {
   j = nlohmann::json{{"scene", r.scene},
                      {"label", r.label},
+                     {"integrator", r.integrator},
                      {"backend", BackendName(r.combo.backend)},
                      {"accel", r.combo.backend == Backend::Embree ? "embree-bvh" : AccelKindName(r.combo.accel)},
                      {"precision", r.combo.backend == Backend::Embree ? "embree" : PrecisionName(r.combo.precision)},
@@ -79,10 +81,26 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
   }
   const Combo refCombo{Backend::Reference, AccelKind::BVH, Precision::Fp64, ""};
   auto refTracer = MakeTracer(scene, refCombo);
+  RenderOptions test;
+  test.integrator = o.integrator;
+  test.diffuse = o.diffuse;
+  test.maxDepth = o.maxDepth > 0 ? o.maxDepth : o.integrator == Integrator::Path ? 8 : 5;
+  test.robustOffsets = true;
+  RenderOptions refOpt = test;
+  if (o.diffuse.kind != DiffuseGather::Kind::None) {
+    refOpt.integrator = Integrator::Path;
+    refOpt.diffuse = DiffuseGather{};
+    refOpt.maxDepth = 2;
+  }
+  const std::string integratorName =
+      std::string(o.integrator == Integrator::Path ? "path" : "whitted") +
+      (o.diffuse.kind == DiffuseGather::Kind::Cube     ? fmt::format(" cube:{}", o.diffuse.n)
+       : o.diffuse.kind == DiffuseGather::Kind::Cosine ? fmt::format(" cosine:{}", o.diffuse.n)
+                                                       : std::string());
   double ms = 0.0;
   std::uint64_t rays = 0;
   if (progress) progress(fmt::format("images: {} reference at {} spp ({}x{})", sref.name, o.referenceSpp, o.width, o.height));
-  const Image high = RenderWith(scene, *refTracer, o.width, o.height, o.referenceSpp, ms, rays);
+  const Image high = RenderWith(scene, *refTracer, refOpt, o.width, o.height, o.referenceSpp, ms, rays);
   auto save = [&](const Image& img, const std::string& name) {
     if (o.imageDir.empty()) return;
     std::error_code ec;
@@ -92,7 +110,7 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
   save(high, fmt::format("{}-reference-{}spp.png", sref.name, o.referenceSpp));
   std::vector<ImageRow> rows;
   std::vector<Image> sameRef;
-  for (int spp : o.spps) sameRef.push_back(RenderWith(scene, *refTracer, o.width, o.height, spp, ms, rays));
+  for (int spp : o.spps) sameRef.push_back(RenderWith(scene, *refTracer, test, o.width, o.height, spp, ms, rays));
   for (const Combo& c : combos) {
     std::unique_ptr<Tracer> tracer;
     std::string skip;
@@ -105,6 +123,7 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
       ImageRow r;
       r.scene = sref.name;
       r.label = c.Label();
+      r.integrator = integratorName;
       r.combo = c;
       r.spp = o.spps[si];
       r.width = o.width;
@@ -114,7 +133,9 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
         rows.push_back(r);
         continue;
       }
-      const Image img = RenderWith(scene, *tracer, o.width, o.height, r.spp, r.renderMs, r.rays);
+      RenderOptions ro = test;
+      ro.robustOffsets = c.backend != Backend::Embree && c.precision != Precision::Fast;
+      const Image img = RenderWith(scene, *tracer, ro, o.width, o.height, r.spp, r.renderMs, r.rays);
       const ImageDiff d = CompareImages(o.width, o.height, img.rgb, high.rgb);
       r.psnr = d.psnr;
       r.meanError = d.meanError;

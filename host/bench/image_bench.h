@@ -1,4 +1,4 @@
-// Samples per pixel against image error: Whitted renders (render/renderer.h)
+// Samples per pixel against image error: renders (render/renderer.h)
 // of one scene at spp 1, 4, 16, ... with several configurations, compared
 // (render/image_io.h CompareImages: PSNR, mean absolute error, after display
 // encoding) with a high-spp render by the fp64 reference backend, and with
@@ -15,6 +15,7 @@
 
 #include "host/bench/bench_options.h"
 #include "host/bench/bench_scenes.h"
+#include "host/render/renderer.h"
 
 namespace cr::bench {
 
@@ -24,10 +25,17 @@ struct ImageBenchOptions {
   int referenceSpp = 64;
   std::vector<Combo> combos;  // empty: simd bvh robust and fast, scalar bvh fp64, embree single
   std::string imageDir;       // when set, the renders are written there as PNG
+  // What renders: the Whitted integrator (reference: Whitted on the fp64
+  // backend), with --diffuse (reference: the path tracer limited to two
+  // vertices, the same light transport), or the path tracer (reference: the
+  // path tracer), maxDepth vertices.
+  Integrator integrator = Integrator::Whitted;
+  DiffuseGather diffuse;
+  int maxDepth = 0;  // 0: 5 for Whitted, 8 for the path tracer
 };
 
 struct ImageRow {
-  std::string scene, label;
+  std::string scene, label, integrator;
   Combo combo;
   int spp = 0, width = 0, height = 0;
   double renderMs = 0.0;

@@ -213,12 +213,14 @@ std::string ImageTable(const json& images)
   if (!images.is_array() || images.empty()) return "";
   const json& first = images[0];
   std::string s = fmt::format(
-      "## Samples per pixel against image error\n\nWhitted renders of {} at {}x{}, compared after display "
-      "encoding with a render by the fp64 reference backend at high spp (PSNR, mean absolute error), and with the "
+      "## Samples per pixel against image error\n\nRenders ({}) of {} at {}x{}, compared after display "
+      "encoding with a render by the fp64 reference backend at high spp (PSNR, mean absolute error; for "
+      "--diffuse, the path tracer limited to two vertices), and with the "
       "reference's render at the same spp and seed (arithmetic alone; ∞: identical images).\n\n"
       "| configuration | spp | render ms | Mrays/s | PSNR dB | mean abs. error | PSNR same spp | mean abs. error same spp | note |\n"
       "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n",
-      Str(first, "scene"), Num(first, "width"), Num(first, "height"));
+      first.contains("integrator") ? Str(first, "integrator") : std::string("whitted"), Str(first, "scene"),
+      Num(first, "width"), Num(first, "height"));
   for (const auto& r : images) {
     const double ms = Num(r, "render_ms");
     const std::string same = r["psnr_same_spp"].is_number() ? F(r["psnr_same_spp"].get<double>()) : "∞";

@@ -123,6 +123,9 @@ Run RegisterBench(CLI::App& app)
     std::uint64_t rays = 0, seed = 1;
     std::string out = "bench-out", imageScene, device;
     bool hard = false, scaling = false, quick = false, noImages = false, noPlots = false, noStats = false;
+    std::string imageIntegrator, imageDiffuse, imageSize;
+    std::vector<int> imageSpps;
+    int imageReferenceSpp = 0;
     std::vector<double> sdfEps, sdfRelax;
     std::vector<long> sdfSteps;
   };
@@ -154,6 +157,15 @@ Run RegisterBench(CLI::App& app)
   cmd->add_option("--sdf-steps", o->sdfSteps, "SDF axis: step budgets (1 to 2^20), comma-separated")
       ->delimiter(',')
       ->check(CLI::Range(1l, 1l << 20));
+  cmd->add_option("--image-integrator", o->imageIntegrator,
+                  "Image study: whitted or path, rendered with every configuration of the run (--backend x --accel x "
+                  "--precision); without it, Whitted with simd bvh robust and fast, scalar bvh fp64 and Embree");
+  cmd->add_option("--image-diffuse", o->imageDiffuse,
+                  "Image study: Whitted with cube:N or cosine:K diffuse gather (reference: the path tracer, 2 vertices)");
+  cmd->add_option("--image-spp", o->imageSpps, "Image study: samples per pixel, comma-separated (default 1,4,16)")
+      ->delimiter(',');
+  cmd->add_option("--image-reference-spp", o->imageReferenceSpp, "Image study: spp of the fp64 reference (default 64)");
+  cmd->add_option("--image-size", o->imageSize, "Image study: WxH (default 96x96)");
   cmd->add_flag("--hard", o->hard, "Run the hard-case suite instead (writes DIR/HARD_CASES.md)");
   cmd->add_flag("--scaling", o->scaling, "Run the scaling study instead (generated scenes, 10^3..10^7 primitives)");
   cmd->add_flag("--quick", o->quick, "CI size: 4096 rays per set, one timed run, a tiny image study");
@@ -280,6 +292,16 @@ Run RegisterBench(CLI::App& app)
           io.referenceSpp = 16;
         }
         io.imageDir = (std::filesystem::path(b.outDir) / "images").string();
+        if (!o->imageIntegrator.empty()) {
+          if (o->imageIntegrator == "path") io.integrator = Integrator::Path;
+          else if (o->imageIntegrator != "whitted")
+            throw InputError(fmt::format("--image-integrator '{}': expected whitted or path", o->imageIntegrator));
+          io.combos = combos;
+        }
+        if (!o->imageDiffuse.empty()) io.diffuse = ParseDiffuse(o->imageDiffuse);
+        if (!o->imageSpps.empty()) io.spps = o->imageSpps;
+        if (o->imageReferenceSpp > 0) io.referenceSpp = o->imageReferenceSpp;
+        if (!o->imageSize.empty()) ParseSize(o->imageSize, io.width, io.height);
         bench::SceneRef imageScene = scenes.front();
         const std::string want = o->imageScene.empty() ? "balls" : o->imageScene;
         bool found = false;

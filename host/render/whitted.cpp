@@ -265,7 +265,7 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
 {
   const Scene& scene = ctx.scene;
   const std::size_t nl = scene.lights.size() + scene.areaLights.size();
-  const std::size_t maxSpawn = 2 + std::size_t(ctx.opt.diffuse.Rays());
+  const std::size_t gather = 2 + std::size_t(ctx.opt.diffuse.Rays());
   Shader shader(ctx, k, begin);
   std::vector<PathRay> queue(end - begin), next;
   std::vector<HitRecord> hits;
@@ -280,6 +280,8 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
   });
   while (!queue.empty()) {
     const std::size_t n = queue.size();
+    // Only the eye rays (the first queue) gather: room for their rays.
+    const std::size_t maxSpawn = queue[0].type == RayType::Eye ? gather : 2;
     batch.resize(n);
     for (std::size_t i = 0; i < n; ++i) batch[i] = queue[i].ray;
     auto ta = Clock::now();
