@@ -202,6 +202,15 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
     CHECK(r.code == 2);
     CHECK(r.err.find("--size '0x5'") != std::string::npos);
   }
+  for (const char* args : {"--integrator bidir", "--diffuse cube:0", "--diffuse cosine:x", "--diffuse sphere:4",
+                           "--integrator path --diffuse cosine:4", "--spp 0", "--spd --integrator path",
+                           "--area-lights -1", "--time-limit -2", "--depth 65"}) {
+    Result r = Run("render " + scene + " --size 8x8 --no-progress " + args + " -o " + (Dir() / "r.png").string());
+    INFO(args, ": ", r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("cellray: ") == 0);
+    CHECK_FALSE(fs::exists(Dir() / "r.png"));
+  }
   {
     Result r = Run("trace " + scene + " --no-such-option");
     CHECK(r.code == 2);

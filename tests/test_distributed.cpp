@@ -280,3 +280,31 @@ TEST_CASE("NFF area lights and lens: ids in file order, errors with file and lin
   test::CheckNffError("lens 0.1 2\n", "before the 'v'");
   test::CheckNffError("v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 8 8\nlens 0.1 0\n", "focal");
 }
+
+TEST_CASE("soft-shadow and path rays: every structure x backend, robust and fp64, 0 wrong against the reference")
+{
+  const auto guard = test::OpenCLTestCacheDir();
+  std::vector<Backend> backends{Backend::Scalar, Backend::Simd};
+  if (test::HaveOpenCLDevice()) backends.push_back(Backend::OpenCL);
+  for (const std::string path : {test::SourcePath("scenes/distributed/cornell.nff"), test::SpdPath("balls")}) {
+    const Scene& scene = test::CachedScene(path);
+    for (RayKind kind : {RayKind::Soft, RayKind::Path}) {
+      const auto rays = test::MakeRays(scene, kind, 40);
+      CHECK(rays.size() > 1000u);
+      for (Backend backend : backends)
+        for (Precision precision : {Precision::Robust, Precision::Fp64})
+          for (AccelKind accel : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH}) {
+            TraceConfig cfg;
+            cfg.backend = backend;
+            cfg.accel = accel;
+            cfg.precision = precision;
+            const auto r = test::CheckTracer(scene, cfg, rays, IsOcclusionKind(kind));
+            INFO(path, " ", std::string(RayKindName(kind)), " ", std::string(BackendName(backend)), " ",
+                 std::string(AccelKindName(accel)), " ", std::string(PrecisionName(precision)), ": ", r.wrong,
+                 " wrong of ", r.rays);
+            CHECK(r.rays == rays.size());
+            CHECK(r.wrong == 0);
+          }
+    }
+  }
+}
