@@ -3,7 +3,9 @@
 // towards a point sampled on an area light.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -58,5 +60,40 @@ inline RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
   r.tmax = tmax;
   return r;
 }
+
+// A shadow ray and the light it delivers to out[point] if unblocked.
+struct ShadowRay {
+  RayRecord ray;
+  glm::vec3 light{0.0f};
+  std::uint32_t point = 0;
+  std::uint32_t sourcePrim = 0;
+  std::uint8_t sourceOpaque = 0;  // only opaque surfaces can be self-shadowed in error
+  std::uint8_t valid = 0;
+};
+
+inline double MsSince(std::chrono::steady_clock::time_point a)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count();
+}
+
+// Traces the rays of a queue (elements with a `ray`) as one closest-hit batch.
+template <class Q>
+void TraceQueue(Tracer& tracer, const std::vector<Q>& queue, std::vector<RayRecord>& batch,
+                std::vector<HitRecord>& hits, RenderStats& st, std::uint64_t& raysCast)
+{
+  batch.resize(queue.size());
+  for (std::size_t i = 0; i < queue.size(); ++i) batch[i] = queue[i].ray;
+  const auto t0 = std::chrono::steady_clock::now();
+  tracer.Trace(batch, hits, false, nullptr);
+  st.traceMs += MsSince(t0);
+  raysCast += queue.size();
+}
+
+// Compacts the valid shadow rays, traces them as one any-hit batch, and adds
+// the light of the unblocked ones to out[point] (counting blocked ones, and
+// those blocked by their own opaque primitive).
+void TraceShadows(const Scene& scene, Tracer& tracer, std::vector<ShadowRay>& shadows, glm::vec3* out,
+                  std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st,
+                  std::uint64_t& raysCast);
 
 }  // namespace cr

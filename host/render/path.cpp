@@ -26,8 +26,6 @@ namespace cr {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
 struct PathState {
   RayRecord ray;
@@ -39,11 +37,6 @@ struct PathState {
   std::uint8_t specular = 1;  // arrived by a delta lobe (or is the eye ray)
 };
 
-struct Shadow {
-  RayRecord ray;
-  glm::vec3 light;
-  std::uint8_t valid = 0;
-};
 
 // Random-number streams of vertex `depth`: 16 apart.
 std::uint64_t Stream(int depth, int dim) { return 1000 + 16 * std::uint64_t(depth) + std::uint64_t(dim); }
@@ -59,7 +52,7 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
   const std::size_t nLights = nPoint + nArea;
   std::vector<PathState> queue(end - begin), next;
   std::vector<HitRecord> hits;
-  std::vector<Shadow> shadows;
+  std::vector<ShadowRay> shadows;
   std::vector<PathState> cont;
   std::vector<std::uint8_t> alive;
   std::vector<glm::vec3> add;
@@ -73,14 +66,9 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
 
   while (!queue.empty()) {
     const std::size_t n = queue.size();
-    batch.resize(n);
-    for (std::size_t i = 0; i < n; ++i) batch[i] = queue[i].ray;
-    auto ta = Clock::now();
-    tracer.Trace(batch, hits, false, nullptr);
-    auto tb = Clock::now();
-    st.traceMs += Ms(ta, tb);
-    raysCast += n;
-    shadows.assign(n, Shadow{});
+    TraceQueue(tracer, queue, batch, hits, st, raysCast);
+    const auto tb = std::chrono::steady_clock::now();
+    shadows.assign(n, ShadowRay{});
     cont.resize(n);
     alive.assign(n, 0);
     add.assign(n, glm::vec3(0.0f));
@@ -135,7 +123,10 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
       // Next-event estimation: one light, chosen uniformly.
       if (nLights && bsdf.HasSmooth()) {
         const std::size_t l = std::min(nLights - 1, std::size_t(rnd(0) * double(nLights)));
-        Shadow& sh = shadows[i];
+        ShadowRay& sh = shadows[i];
+        sh.point = ps.point;
+        sh.sourcePrim = id;
+        sh.sourceOpaque = transmitter ? 0 : 1;
         if (l < nPoint) {
           const Light& light = scene.lights[l];
           const glm::dvec3 toL = glm::dvec3(light.position) - p;
@@ -201,30 +192,8 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
       else
         st.pathRays++, st.pathHits += hit;
     }
-    std::size_t ns = 0;
-    std::vector<std::uint32_t> from;
-    from.reserve(n);
-    for (std::size_t i = 0; i < n; ++i)
-      if (shadows[i].valid) {
-        shadows[ns++] = shadows[i];
-        from.push_back(queue[i].point);
-      }
-    auto tc = Clock::now();
-    st.shadeMs += Ms(tb, tc);
-    if (ns) {
-      batch.resize(ns);
-      for (std::size_t i = 0; i < ns; ++i) batch[i] = shadows[i].ray;
-      tracer.Trace(batch, hits, true, nullptr);
-      st.shadowRays += ns;
-      raysCast += ns;
-      for (std::size_t i = 0; i < ns; ++i) {
-        if (hits[i].prim == CR_NO_HIT)
-          out[from[i]] += shadows[i].light;
-        else
-          st.shadowHits++;
-      }
-    }
-    st.traceMs += Ms(tc, Clock::now());
+    st.shadeMs += MsSince(tb);
+    TraceShadows(scene, tracer, shadows, out, batch, hits, st, raysCast);
     next.clear();
     for (std::size_t i = 0; i < n; ++i)
       if (alive[i]) next.push_back(cont[i]);

@@ -122,6 +122,31 @@ RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& si
   return MakeRay(o, end - o, 1.0f);
 }
 
+void TraceShadows(const Scene& scene, Tracer& tracer, std::vector<ShadowRay>& shadows, glm::vec3* out,
+                  std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st, std::uint64_t& raysCast)
+{
+  std::size_t ns = 0;
+  for (std::size_t i = 0; i < shadows.size(); ++i)
+    if (shadows[i].valid) shadows[ns++] = shadows[i];
+  shadows.resize(ns);
+  if (!ns) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  batch.resize(ns);
+  for (std::size_t i = 0; i < ns; ++i) batch[i] = shadows[i].ray;
+  tracer.Trace(batch, hits, true, nullptr);
+  st.shadowRays += ns;
+  raysCast += ns;
+  for (std::size_t i = 0; i < ns; ++i) {
+    if (hits[i].prim == CR_NO_HIT) {
+      out[shadows[i].point] += shadows[i].light;
+    } else {
+      st.shadowHits++;
+      if (shadows[i].sourceOpaque && scene.IdOfHit(hits[i].prim, hits[i].u) == shadows[i].sourcePrim) st.selfShadowed++;
+    }
+  }
+  st.traceMs += MsSince(t0);
+}
+
 Image Render(const Scene& scene, Tracer& tracer, const RenderOptions& optIn, RenderStats* statsOut)
 {
   using Clock = std::chrono::steady_clock;

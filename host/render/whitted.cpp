@@ -17,8 +17,6 @@ namespace cr {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
 
 enum class RayType : std::uint8_t { Eye, Reflection, Refraction, Diffuse };
 
@@ -33,15 +31,6 @@ struct PathRay {
   std::uint64_t node;
 };
 
-// A shadow ray and the light it would deliver if unblocked.
-struct ShadowRay {
-  RayRecord ray;
-  glm::vec3 light;
-  std::uint32_t point;
-  std::uint32_t sourcePrim;
-  std::uint8_t sourceOpaque;  // only opaque surfaces can be self-shadowed in error
-  std::uint8_t valid;
-};
 
 // Random-number streams (RenderContext::Random): per tree node, 64 apart.
 constexpr std::uint64_t kLightStream = 100;    // + 4 l: area light l's point
@@ -282,14 +271,8 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
     const std::size_t n = queue.size();
     // Only the eye rays (the first queue) gather: room for their rays.
     const std::size_t maxSpawn = queue[0].type == RayType::Eye ? gather : 2;
-    batch.resize(n);
-    for (std::size_t i = 0; i < n; ++i) batch[i] = queue[i].ray;
-    auto ta = Clock::now();
-    tracer.Trace(batch, hits, false, nullptr);
-    auto tb = Clock::now();
-    st.traceMs += Ms(ta, tb);
-    raysCast += n;
-
+    TraceQueue(tracer, queue, batch, hits, st, raysCast);
+    const auto tb = std::chrono::steady_clock::now();
     shadows.resize(n * nl);
     spawned.resize(n * maxSpawn);
     nSpawned.resize(n);
@@ -310,29 +293,9 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
         case RayType::Diffuse: st.diffuseRays++, st.diffuseHits += hit; break;
       }
     }
-    // Shadow rays of this bounce, compacted, then traced as one any-hit batch.
-    std::size_t ns = 0;
-    for (std::size_t i = 0; i < n * nl; ++i)
-      if (shadows[i].valid) shadows[ns++] = shadows[i];
-    shadows.resize(ns);
-    auto tc = Clock::now();
-    st.shadeMs += Ms(tb, tc);
-    if (ns) {
-      batch.resize(ns);
-      for (std::size_t i = 0; i < ns; ++i) batch[i] = shadows[i].ray;
-      tracer.Trace(batch, hits, true, nullptr);
-      st.shadowRays += ns;
-      raysCast += ns;
-      for (std::size_t i = 0; i < ns; ++i) {
-        if (hits[i].prim == CR_NO_HIT) {
-          out[shadows[i].point] += shadows[i].light;
-        } else {
-          st.shadowHits++;
-          if (shadows[i].sourceOpaque && scene.IdOfHit(hits[i].prim, hits[i].u) == shadows[i].sourcePrim) st.selfShadowed++;
-        }
-      }
-    }
-    st.traceMs += Ms(tc, Clock::now());
+    st.shadeMs += MsSince(tb);
+    // Shadow rays of this bounce, traced as one any-hit batch.
+    TraceShadows(scene, tracer, shadows, out, batch, hits, st, raysCast);
     next.clear();
     for (std::size_t i = 0; i < n; ++i)
       for (int j = 0; j < nSpawned[i]; ++j) next.push_back(spawned[i * maxSpawn + j]);
