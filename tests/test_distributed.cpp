@@ -16,15 +16,6 @@ using namespace cr;
 
 namespace {
 
-Image RenderWith(const Scene& scene, Backend backend, AccelKind accel, const RenderOptions& ro, RenderStats* st = nullptr)
-{
-  TraceConfig cfg;
-  cfg.backend = backend;
-  cfg.accel = accel;
-  cfg.unifiedHits = true;
-  auto tracer = CreateTracer(scene, cfg);
-  return Render(scene, *tracer, ro, st);
-}
 
 // Irradiance at x (normal n) from a convex polygon of radiance L, all of it
 // above x's plane: E = L/2 sum_i angle(r_i, r_i+1) n . unit(r_i x r_i+1)
@@ -75,7 +66,7 @@ TEST_CASE("area light: the image of a white plane is its irradiance over pi (Lam
     CHECK(scene.areaLights[0].n.z == doctest::Approx(-1.0));
     RenderOptions ro;
     ro.spp = occluded ? 1024 : 256;  // the penumbra breaks the light's stratification
-    Image img = RenderWith(scene, Backend::Simd, AccelKind::BVH, ro);
+    Image img = test::RenderWith(scene, Backend::Simd, AccelKind::BVH, ro);
     const CameraFrame f = MakeCameraFrame(scene.camera, img.width, img.height);
     double serr = 0.0, err = 0.0, ref = 0.0, lo = 1e9, hi = 0.0;
     for (int y = 0; y < img.height; ++y)
@@ -127,7 +118,7 @@ TEST_CASE("thin lens: a point's circle of confusion has the thin-lens diameter, 
              "lens", scene);
     RenderOptions ro;
     ro.spp = 256;
-    Image img = RenderWith(scene, Backend::Simd, AccelKind::BVH, ro);
+    Image img = test::RenderWith(scene, Backend::Simd, AccelKind::BVH, ro);
     double m0 = 0, mx = 0, my = 0;
     for (int y = 0; y < img.height; ++y)
       for (int x = 0; x < img.width; ++x) {
@@ -168,7 +159,7 @@ TEST_CASE("diffuse interreflection: --diffuse cosine:K and cube:N converge to th
   refOpt.integrator = Integrator::Path;
   refOpt.spp = 4096;
   refOpt.seed = 99;
-  const Image ref = RenderWith(scene, Backend::Simd, AccelKind::BVH, refOpt);
+  const Image ref = test::RenderWith(scene, Backend::Simd, AccelKind::BVH, refOpt);
   CHECK(Mean(ref.rgb) > 0.05);
   struct Setup {
     const char* name;
@@ -186,7 +177,7 @@ TEST_CASE("diffuse interreflection: --diffuse cosine:K and cube:N converge to th
       ro.integrator = s.integrator;
       ro.diffuse = s.diffuse;
       ro.spp = spps[i];
-      e[i] = Rmse(RenderWith(scene, Backend::Simd, AccelKind::BVH, ro), ref);
+      e[i] = Rmse(test::RenderWith(scene, Backend::Simd, AccelKind::BVH, ro), ref);
     }
     const double slope = std::log(e[2] / e[0]) / std::log(16.0);
     INFO(std::string(s.name), ": RMSE ", e[0], " ", e[1], " ", e[2], " at 4, 16, 64 spp, slope ", slope);
@@ -217,11 +208,11 @@ TEST_CASE("the new scenes render to the same image on every structure and backen
     ro.spp = 4;
     ro.integrator = s.integrator;
     if (*s.diffuse) ro.diffuse = ParseDiffuse(s.diffuse);
-    const Image ref = RenderWith(cornell, Backend::Reference, AccelKind::BVH, ro);
+    const Image ref = test::RenderWith(cornell, Backend::Reference, AccelKind::BVH, ro);
     CHECK(Mean(ref.rgb) > 0.05);
     for (Backend backend : backends)
       for (AccelKind accel : {AccelKind::Grid, AccelKind::Octree, AccelKind::BVH}) {
-        const Image img = RenderWith(cornell, backend, accel, ro);
+        const Image img = test::RenderWith(cornell, backend, accel, ro);
         const ImageDiff d = CompareImages(img.width, img.height, img.rgb, ref.rgb);
         INFO(std::string(s.name), " ", std::string(BackendName(backend)), " ", std::string(AccelKindName(accel)), ": PSNR ", d.psnr, " dB, ", d.nDiffering,
              " pixels differ");
@@ -244,14 +235,14 @@ TEST_CASE("render: --time-limit stops after whole passes, --write-every delivers
     seen.push_back(passes);
   };
   RenderStats st;
-  const Image full = RenderWith(scene, Backend::Simd, AccelKind::BVH, ro, &st);
+  const Image full = test::RenderWith(scene, Backend::Simd, AccelKind::BVH, ro, &st);
   CHECK(st.passes == 4);
   CHECK(seen == std::vector<int>{1, 2, 3});
   CHECK_FALSE(st.timeLimited);
   ro.spp = 65536;
   ro.writeEvery = 0;
   ro.timeLimit = 0.3;
-  const Image part = RenderWith(scene, Backend::Simd, AccelKind::BVH, ro, &st);
+  const Image part = test::RenderWith(scene, Backend::Simd, AccelKind::BVH, ro, &st);
   CHECK(st.timeLimited);
   CHECK(st.passes >= 1);
   CHECK(st.passes < 65536);

@@ -12,15 +12,6 @@ using namespace cr;
 
 namespace {
 
-Image RenderWith(const Scene& scene, Backend backend, AccelKind accel, const RenderOptions& ro, RenderStats* st)
-{
-  TraceConfig cfg;
-  cfg.backend = backend;
-  cfg.accel = accel;
-  cfg.unifiedHits = true;
-  auto tracer = CreateTracer(scene, cfg);
-  return Render(scene, *tracer, ro, st);
-}
 
 // A closed convex mesh: an icosahedron subdivided twice and pushed onto a
 // sphere (320 triangles, outward winding), as NFF polygons.
@@ -68,7 +59,7 @@ TEST_CASE("render --spd on tetra reproduces the published SPD ray counts")
   RenderOptions ro;
   ro.spd = true;
   RenderStats st;
-  Image img = RenderWith(scene, Backend::Scalar, AccelKind::BVH, ro, &st);
+  Image img = test::RenderWith(scene, Backend::Scalar, AccelKind::BVH, ro, &st);
   CHECK(img.width == 512);
   CHECK(st.eyeRays == 263169u);
   CHECK(double(st.eyeHits) == doctest::Approx(49788).epsilon(0.005));
@@ -88,7 +79,7 @@ TEST_CASE("a convex opaque object lit from outside never shadows itself")
     ParseNFF(std::string(kView) + geometry, "convex", scene);
     RenderOptions ro;
     RenderStats st;
-    RenderWith(scene, Backend::Scalar, AccelKind::BVH, ro, &st);
+    test::RenderWith(scene, Backend::Scalar, AccelKind::BVH, ro, &st);
     INFO(scene.NumPrims(), " primitives: ", st.shadowRays, " shadow rays");
     CHECK(st.shadowRays > 3000u);
     CHECK(st.shadowHits == 0u);  // every shadow ray starts where N.L > 0
@@ -112,7 +103,7 @@ TEST_CASE("a huge ground (a sphere of radius 1e6, a quad 2e6 across) neither sha
       ParseNFF(std::string(view) + ground + "s 0 1 0 1\n", "ground", scene);
       RenderOptions ro;
       RenderStats st;
-      RenderWith(scene, backend, AccelKind::BVH, ro, &st);
+      test::RenderWith(scene, backend, AccelKind::BVH, ro, &st);
       INFO(ground, " ", BackendName(backend), ": ", st.shadowRays, " shadow rays, ", st.shadowHits, " blocked");
       CHECK(st.selfShadowed == 0u);
       // Only the ground near the sphere's foot can be blocked (the sphere's
@@ -132,9 +123,9 @@ TEST_CASE("images agree across structures and backends (PSNR >= 60 dB) and with 
     RenderOptions ro;
     ro.spd = true;  // corner rays averaged, as the acceptance renders are
     ro.width = ro.height = 160;
-    Image ref = RenderWith(scene, Backend::Reference, AccelKind::BVH, ro, nullptr);
+    Image ref = test::RenderWith(scene, Backend::Reference, AccelKind::BVH, ro, nullptr);
     for (AccelKind accel : accels) {
-      Image img = RenderWith(scene, Backend::Scalar, accel, ro, nullptr);
+      Image img = test::RenderWith(scene, Backend::Scalar, accel, ro, nullptr);
       ImageDiff d = CompareImages(img.width, img.height, img.rgb, ref.rgb);
       INFO(std::string(name), " ", std::string(AccelKindName(accel)), ": PSNR ", d.psnr, " dB, ", d.nDiffering, " pixels differ");
       CHECK(d.psnr >= 60.0);

@@ -21,6 +21,7 @@
 #include "host/rays/raygen.h"
 #include "host/reference/check.h"
 #include "host/reference/reference.h"
+#include "host/render/renderer.h"
 #include "host/scene/scene.h"
 #include "host/trace/tracer.h"
 
@@ -204,6 +205,18 @@ inline void CheckConformance(const Scene& scene, const std::string& name, Backen
       else if (r.wrong) MESSAGE("reported, not asserted: ", what);
     }
   }
+}
+
+// Renders `scene` with a tracer of the given backend and structure.
+inline Image RenderWith(const Scene& scene, Backend backend, AccelKind accel, const RenderOptions& ro,
+                        RenderStats* st = nullptr)
+{
+  TraceConfig cfg;
+  cfg.backend = backend;
+  cfg.accel = accel;
+  cfg.unifiedHits = true;
+  auto tracer = CreateTracer(scene, cfg);
+  return Render(scene, *tracer, ro, st);
 }
 
 // Whether an OpenCL device is present (a failure to list counts as none).
