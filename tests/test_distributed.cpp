@@ -277,7 +277,7 @@ TEST_CASE("soft-shadow and path rays: every structure x backend, robust and fp64
   const auto guard = test::OpenCLTestCacheDir();
   std::vector<Backend> backends{Backend::Scalar, Backend::Simd};
   if (test::HaveOpenCLDevice()) backends.push_back(Backend::OpenCL);
-  for (const std::string path : {test::SourcePath("scenes/distributed/cornell.nff"), test::SpdPath("balls")}) {
+  for (const std::string& path : {test::SourcePath("scenes/distributed/cornell.nff"), test::SpdPath("balls")}) {
     const Scene& scene = test::CachedScene(path);
     for (RayKind kind : {RayKind::Soft, RayKind::Path}) {
       const auto rays = test::MakeRays(scene, kind, 40);
