@@ -25,8 +25,12 @@ typedef struct {
   CR_PRIM_TYPES(CR_PRIM_ARRAY)
 #undef CR_PRIM_ARRAY
   PrimRanges ranges;
+  /* Motion of each unified piece, 4 floats (kernels/motion.h), or null for
+   * a static scene. */
+  CR_GLOBAL const float* motion;
 } PrimView;
 
+#include "motion.h"
 #include "numeric.h"
 #include "sphere.h"
 #include "triangle.h"
@@ -65,6 +69,11 @@ CR_FUNC_HOT int Prim_Intersect(const PrimView* pv, uint g, const Ray* r, Hit* hi
 {
   real t = (real)0.0f, u = (real)0.0f, v = (real)0.0f;
   int found = 0;
+#if CR_HAS_MOTION
+  /* A moving piece meets the ray shifted into its rest frame (motion.h). */
+  Ray moved;
+  if (pv->motion && Motion_Shift(pv->motion, g, r, &moved)) r = &moved;
+#endif
   /* In type order: each test below knows g is past the types above; no
    * code for the types the kernel is not built for. */
 #define CR_PRIM_TEST(T, U, array)                                     \

@@ -26,7 +26,8 @@
 #define CELLRAY_KERNELS_PACKET_CL
 #include "intersect.h"
 
-#define CR_PACKET_RAY_FIELDS 14
+/* Field 14 is the ray's time where the scene moves (kernels/motion.h). */
+#define CR_PACKET_RAY_FIELDS (14 + CR_HAS_MOTION)
 #define CR_PACKET_AXES_FIELDS 3
 #define CR_PACKET_HIT_FIELDS 3
 
@@ -42,6 +43,9 @@ CR_FUNC void Packet_StoreRay(__local real* sRay, __local uint* sAxes, uint lid, 
   sRay[11 * nLanes + lid] = r->sx;
   sRay[12 * nLanes + lid] = r->sy;
   sRay[13 * nLanes + lid] = r->sz;
+#if CR_HAS_MOTION
+  sRay[14 * nLanes + lid] = r->time;
+#endif
   sAxes[lid] = (uint)r->kx;
   sAxes[nLanes + lid] = (uint)r->ky;
   sAxes[2 * nLanes + lid] = (uint)r->kz;
@@ -59,6 +63,11 @@ CR_FUNC void Packet_LoadRay(__local const real* sRay, __local const uint* sAxes,
   r->sx = sRay[11 * nLanes + lid];
   r->sy = sRay[12 * nLanes + lid];
   r->sz = sRay[13 * nLanes + lid];
+#if CR_HAS_MOTION
+  r->time = sRay[14 * nLanes + lid];
+#else
+  r->time = (real)0.0f;
+#endif
   r->kx = (int)sAxes[lid];
   r->ky = (int)sAxes[nLanes + lid];
   r->kz = (int)sAxes[2 * nLanes + lid];
@@ -108,6 +117,10 @@ CR_FUNC int Packet_PrimTest(const PrimView* pv, uint g, const Ray* ray, const Hi
   *t = (real)0.0f;
   *u = (real)0.0f;
   *v = (real)0.0f;
+#if CR_HAS_MOTION
+  Ray moved;
+  if (pv->motion && Motion_Shift(pv->motion, g, ray, &moved)) ray = &moved;
+#endif
 #define CR_PACKET_TEST(T, U, array)                                                  \
   CR_IF(U, if (Prim_Is(&pv->ranges, CR_PRIM_##U, g)) {                               \
     const T prim = T##_Load(pv->array + Prim_Local(&pv->ranges, CR_PRIM_##U, g));    \

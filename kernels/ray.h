@@ -32,6 +32,9 @@ typedef struct {
    * its double-float cold path (Sphere_NeedsDf, Cone_NeedsDf). 0 from
    * Ray_Init; set by the traversal that knows the query. */
   int anyHit;
+  /* Time in the shutter interval [0, 1] (motion blur, kernels/motion.h): 0
+   * from Ray_Init; set from the ray set's times where it has them. */
+  real time;
 } Ray;
 
 /* Closest hit so far. g is a unified primitive index or CR_NO_HIT; t starts at
@@ -83,6 +86,7 @@ CR_FUNC void Ray_Init(Ray* r, const RayRecord* rec)
   r->ky = ky;
   r->kz = kz;
   r->anyHit = 0;
+  r->time = (real)0.0f;
   r->sx = CR_PICK3(r->dir, kx) / CR_PICK3(r->dir, kz);
   r->sy = CR_PICK3(r->dir, ky) / CR_PICK3(r->dir, kz);
   r->sz = (real)1.0f / CR_PICK3(r->dir, kz);

@@ -4,6 +4,8 @@
  *   CR_FP64 | CR_FAST                 precision (intersect.h); default robust
  *   CR_HAS_<TYPE> = 0|1               primitive types present (default 1;
  *                                     kernels/types.h CR_PRIM_TYPES, CR_IF)
+ *   CR_HAS_MOTION = 0|1               moving pieces and ray times (default
+ *                                     1; kernels/motion.h)
  *   CR_ACCEL_ONE, CR_ACCEL_<UPPER>   the one traversal compiled (its name
  *                                     in kernels/types.h CR_ACCEL_TYPES);
  *                                     none: all, chosen by the `accel`
@@ -63,15 +65,18 @@ typedef float4 camreal4;
 /* The scene and structure arguments of every kernel, in binding order
  * (host/cl/cl_tracer.cpp binds them by these positions): for each primitive
  * type of CR_PRIM_TYPES its array and its count (arguments 2k and 2k + 1),
- * the primitive ids, for each structure of CR_ACCEL_TYPES its header, nodes
- * and references (3 arguments each), then accel, anyHitArg, unifiedArg. */
+ * the primitive ids, the pieces' motion (kernels/motion.h; a placeholder
+ * for a static scene), for each structure of CR_ACCEL_TYPES its header,
+ * nodes and references (3 arguments each), then accel, anyHitArg,
+ * unifiedArg. */
 #define CR_PRIM_PARAM_(T, U, a) CR_GLOBAL const T *a, uint a##Count,
 #define CR_PRIM_ARG_(T, U, a) a, a##Count,
 #define CR_ACCEL_PARAM_(N, U, l, H, Nd) CR_GLOBAL const H *l##Header, CR_GLOBAL const Nd *l##Nodes, CR_GLOBAL const uint *l##Refs,
 #define CR_ACCEL_ARG_(N, U, l, H, Nd) l##Header, l##Nodes, l##Refs,
 #define CR_SCENE_PARAMS                                                                                         \
   CR_PRIM_TYPES(CR_PRIM_PARAM_)                                                                                \
-  CR_GLOBAL const uint *primIds, CR_ACCEL_TYPES(CR_ACCEL_PARAM_) int accel, int anyHitArg, int unifiedArg
+  CR_GLOBAL const uint *primIds, CR_GLOBAL const float *motion, CR_ACCEL_TYPES(CR_ACCEL_PARAM_) int accel,           \
+      int anyHitArg, int unifiedArg
 #ifdef CR_ANYHIT
 #define CR_QUERY_ANYHIT CR_ANYHIT
 #else
@@ -83,17 +88,22 @@ typedef float4 camreal4;
 #define CR_QUERY_UNIFIED unifiedArg
 #endif
 
-/* The arrays and their ranges of unified indices, from the arguments
- * (Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0)). */
+/* The arrays and their ranges of unified indices, and the motion, from the
+ * arguments (Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion)). */
 #define CR_PRIM_VIEW_SET_(T, U, a) \
   pv.a = a;                        \
   pv.ranges.begin[CR_PRIM_##U] = n; \
   n += a##Count;
-CR_FUNC PrimView Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_PARAM_) int unused)
+CR_FUNC PrimView Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_PARAM_) CR_GLOBAL const float* motion)
 {
   PrimView pv;
   uint n = 0u;
-  (void)unused;
+#if CR_HAS_MOTION
+  pv.motion = motion;
+#else
+  pv.motion = 0;
+  (void)motion;
+#endif
   CR_PRIM_TYPES(CR_PRIM_VIEW_SET_)
   for (uint k = CR_NUM_PRIM_TYPES; k < CR_PRIM_RANGE_SLOTS; ++k) pv.ranges.begin[k] = n; /* the end, and padding */
   return pv;
@@ -155,6 +165,19 @@ CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceSt
 #endif
 }
 
+/* The time of ray i: times[i] where the rays have times (hasTimes), else 0. */
+CR_FUNC float Trace_Time(CR_GLOBAL const float* times, int hasTimes, uint i)
+{
+#if CR_HAS_MOTION
+  return hasTimes ? times[i] : 0.0f;
+#else
+  (void)times;
+  (void)hasTimes;
+  (void)i;
+  return 0.0f;
+#endif
+}
+
 /* The structure arguments of Trace_One and Trace_Packet, by name. */
 #define CR_TRACE_ONE_PARAMS CR_ACCEL_TYPES(CR_ACCEL_PARAM_) int accel
 #define CR_TRACE_ONE_ARGS CR_ACCEL_TYPES(CR_ACCEL_ARG_) accel
@@ -165,12 +188,13 @@ CR_FUNC void Trace_StoreStats(CR_GLOBAL TraceStats* stats, uint i, const TraceSt
  * answer to hits[i], its counters to stats (when counted). anyHitArg and
  * unifiedArg are read only by a generic build (CR_QUERY_*). */
 CR_FUNC void Trace_One(const PrimView* pv, CR_TRACE_ONE_PARAMS, CR_GLOBAL const uint* primIds, int anyHitArg,
-                       int unifiedArg, const RayRecord* rec, uint i, CR_GLOBAL HitRecord* hits,
+                       int unifiedArg, const RayRecord* rec, float time, uint i, CR_GLOBAL HitRecord* hits,
                        CR_GLOBAL TraceStats* stats)
 {
   Ray ray;
   Ray_Init(&ray, rec);
   ray.anyHit = CR_QUERY_ANYHIT;
+  ray.time = (real)time;
   Hit hit;
   Hit_Init(&hit, &ray);
   TraceStats st = {0, 0, 0, 0};
@@ -182,16 +206,18 @@ CR_FUNC void Trace_One(const PrimView* pv, CR_TRACE_ONE_PARAMS, CR_GLOBAL const 
   Trace_StoreStats(stats, i, &st);
 }
 
-/* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]. */
+/* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]
+ * (at times[i] where hasTimes). */
 #ifndef CR_SOURCE_CAMERA
 __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
-                         CR_GLOBAL TraceStats* stats)
+                         CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes)
 {
   const uint i = (uint)get_global_id(0);
   if (i >= nRays) return;
-  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
   const RayRecord rec = Trace_LoadRay(rays, i);
-  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, Trace_Time(times, hasTimes, i), i, hits,
+            stats);
 }
 
 #endif
@@ -206,9 +232,9 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
   const int px = (int)get_global_id(0), py = (int)get_global_id(1);
   if (px >= width || py >= height) return;
   const uint i = (uint)py * (uint)width + (uint)px;
-  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, px, py, width, height);
-  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, i, hits, stats);
+  Trace_One(&pv, CR_TRACE_ONE_ARGS, primIds, anyHitArg, unifiedArg, &rec, 0.0f, i, hits, stats);
 }
 
 #endif
@@ -242,11 +268,12 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 
 /* The hit of one lane's ray after the group's packet traversal of the
  * structure the build (or `accel`, the same for the whole group) selects. */
-CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecord* rec, int live, uint lid, int anyHit,
-                         TraceStats* st, CR_PACKET_PARAMS)
+CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecord* rec, float time, int live, uint lid,
+                         int anyHit, TraceStats* st, CR_PACKET_PARAMS)
 {
   Ray ray;
   Ray_Init(&ray, rec);
+  ray.time = (real)time;
   Hit hit;
   Hit_Init(&hit, &ray);
   Packet_StoreRay(sRay, sAxes, lid, CR_PACKET_SIZE, &ray);
@@ -265,16 +292,17 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecor
  * Lanes past nRays take part without a ray. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
     CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
-    CR_GLOBAL TraceStats* stats)
+    CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes)
 {
   CR_PACKET_LOCALS;
   const uint i = (uint)get_global_id(0);
   const uint lid = (uint)get_local_id(0);
   const int live = i < nRays;
-  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
   const RayRecord rec = Trace_LoadRay(rays, live ? i : 0);
   TraceStats st = {0, 0, 0, 0};
-  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
+  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, Trace_Time(times, hasTimes, live ? i : 0u), live, lid,
+                               CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
   if (live) {
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
     Trace_StoreStats(stats, i, &st);
@@ -294,10 +322,10 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
   const int px = (int)get_global_id(0), py = (int)get_global_id(1);
   const uint lid = (uint)get_local_id(1) * CR_PACKET_W + (uint)get_local_id(0);
   const int live = px < width && py < height;
-  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) 0);
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, live ? px : 0, live ? py : 0, width, height);
   TraceStats st = {0, 0, 0, 0};
-  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
+  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, 0.0f, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
   if (live) {
     const uint i = (uint)py * (uint)width + (uint)px;
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));

@@ -43,6 +43,7 @@ inline PrimView MakePrimView(const KernelScene& sc)
   CR_PRIM_TYPES(CR_SIMD_PV_ARRAY_)
 #undef CR_SIMD_PV_ARRAY_
   pv.ranges = sc.ranges;
+  pv.motion = sc.motion;
   return pv;
 }
 

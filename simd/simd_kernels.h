@@ -65,6 +65,9 @@ struct KernelScene {
   PrimRanges ranges{};
   const std::uint32_t* primIds = nullptr;  // scene id of every g
   int unifiedHits = 0;                     // TraceConfig::unifiedHits
+  // Motion of every g (kernels/motion.h: 4 floats each), null for a static
+  // scene.
+  const float* motion = nullptr;
 };
 
 // Rays at positions [begin, end) of the ray order: ray order[p] (p itself
@@ -73,6 +76,7 @@ struct KernelScene {
 // multiple of it.
 struct KernelJob {
   const RayRecord* rays = nullptr;
+  const float* times = nullptr;  // per ray (by ray index), or null: every ray at time 0
   HitRecord* hits = nullptr;
   const std::uint32_t* order = nullptr;
   // Packet kernels, without an order: imageWidth > 0 says the rays are a

@@ -137,8 +137,9 @@ class SimdTracer final : public Tracer {
     singleFn_ = e.Select(key);
   }
 
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-             TraceStatsSum* stats) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());
     traced_ = true;
@@ -357,10 +358,11 @@ class DelegatingTracer final : public Tracer {
   {
     info_ = inner_->Info();
   }
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-             TraceStatsSum* stats) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum* stats) override
   {
-    inner_->Trace(rays, hits, occlusion, stats);
+    inner_->Trace(rays, times, hits, occlusion, stats);
   }
   std::string DeviceName() const override { return inner_->DeviceName(); }
   std::string VariantName() const override { return fmt::format("scalar ray ({})", why_); }
@@ -384,6 +386,8 @@ std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& 
     why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
   else if (config.precision == Precision::Fp64)
     why = "fp64 delegated";
+  else if (scene.hasMotion)
+    why = "motion delegated";
   if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
   return std::make_unique<SimdTracer>(scene, config, isa, variant);
 }

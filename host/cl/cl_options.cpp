@@ -64,6 +64,7 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
   s.stats = config.stats;
   s.cameraFp64 = dev.fp64;
   if (!s.generic) {
+    s.motion = scene.hasMotion;
     s.types = 0;
     scene.ForEachType([&](const auto& pieces, std::uint32_t k) { s.types |= pieces.empty() ? 0u : 1u << k; });
     // CELLRAY_CL_TYPES=all compiles every primitive type in, whatever the
@@ -147,6 +148,7 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
 #define CR_HAS_OPTION_(T, U, a) o += fmt::format(" -DCR_HAS_" #U "={}", (s.types >> CR_PRIM_##U) & 1u);
     CR_PRIM_TYPES(CR_HAS_OPTION_)
 #undef CR_HAS_OPTION_
+    o += fmt::format(" -DCR_HAS_MOTION={}", int(s.motion));
     switch (s.accel) {
 #define CR_ACCEL_OPTION_(N, U, l, H, Nd) \
   case AccelKind::N: o += " -DCR_ACCEL_ONE -DCR_ACCEL_" #U; break;

@@ -19,6 +19,7 @@ enum class ClVariant { Ray, Packet };
 struct ClProgramSpec {
   bool generic = false;          // all primitive types and structures, query by argument
   std::uint32_t types = ~0u;     // bit k: the program has primitive type k (CR_PRIM_*)
+  bool motion = true;            // moving pieces and ray times (CR_HAS_MOTION, kernels/motion.h)
   AccelKind accel = AccelKind::BVH;
   bool anyHit = false;
   bool unified = false;

@@ -26,13 +26,14 @@ namespace {
 // at 2k + 1, then the primitive ids and the structures.
 enum SceneArg : cl_uint {
   kArgPrimIds = 2 * CR_NUM_PRIM_TYPES,
+  kArgMotion,
   kArgAccelArrays,  // structure s: header, nodes, references at kArgAccelArrays + 3 s
   kArgAccel = kArgAccelArrays + 3 * CR_NUM_ACCEL_TYPES,
   kArgAnyHit,
   kArgUnified,
   kNumSceneArgs
 };
-enum RaysArg : cl_uint { kArgRays = kNumSceneArgs, kArgNRays, kArgRaysHits, kArgRaysStats };
+enum RaysArg : cl_uint { kArgRays = kNumSceneArgs, kArgNRays, kArgRaysHits, kArgRaysStats, kArgTimes, kArgHasTimes };
 enum PrimaryArg : cl_uint {
   kArgOrg = kNumSceneArgs,
   kArgForward,
@@ -83,8 +84,9 @@ class ClTracer final : public Tracer {
 
   void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
 
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-             TraceStatsSum* stats) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum* stats) override
   {
     Built& p = Program(occlusion, false);
     hits.resize(rays.size());
@@ -99,6 +101,15 @@ class ClTracer final : public Tracer {
     SetArg(k, kArgNRays, cl_uint(n), p.raysName);
     SetArg(k, kArgRaysHits, hitBuf_, p.raysName);
     SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, p.raysName);
+    const bool timed = !times.empty() && scene_.hasMotion;
+    if (timed) {
+      if (times.size() != n) throw RuntimeError(fmt::format("OpenCL: {} ray times for {} rays", times.size(), n));
+      EnsureTimeBuffer(n);
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueWriteBuffer(timeBuf_, CL_FALSE, 0, n * sizeof(float), times.data()),
+                       "clEnqueueWriteBuffer", "ray times");
+    }
+    SetArg(k, kArgTimes, timed ? timeBuf_ : dummy_, p.raysName);
+    SetArg(k, kArgHasTimes, cl_int(timed ? 1 : 0), p.raysName);
     const std::size_t local = std::size_t(p.spec.packetW) * std::size_t(p.spec.packetH);
     Launch(k, cl::NDRange(RoundUp(n, local)), cl::NDRange(local), p.raysName);
     ReadBack(n, hits, stats);
@@ -211,6 +222,8 @@ class ClTracer final : public Tracer {
       SetArg(b->rays, kArgNRays, cl_uint(0), b->raysName);
       SetArg(b->rays, kArgRaysHits, dummy_, b->raysName);
       SetArg(b->rays, kArgRaysStats, dummy_, b->raysName);
+      SetArg(b->rays, kArgTimes, dummy_, b->raysName);
+      SetArg(b->rays, kArgHasTimes, cl_int(0), b->raysName);
       Launch(b->rays, cl::NDRange(lw * lh), cl::NDRange(lw * lh), b->raysName);
     }
     if (b->hasPrimary) {
@@ -288,6 +301,7 @@ class ClTracer final : public Tracer {
       SetArg(k, 2 * t + 1, cl_uint(Prim_Count(&r, t)), name);
     }
     SetArg(k, kArgPrimIds, primIds_, name);
+    SetArg(k, kArgMotion, motion_, name);
     for (cl_uint a = 0; a < 3 * CR_NUM_ACCEL_TYPES; ++a) SetArg(k, kArgAccelArrays + a, accel_[a], name);
     SetArg(k, kArgAccel, cl_int(AccelArg(config_.accel)), name);
     SetArg(k, kArgUnified, cl_int(config_.unifiedHits ? 1 : 0), name);
@@ -326,6 +340,8 @@ class ClTracer final : public Tracer {
       prims_[t] = ClUpload(cl_, PrimTypeName(t), pieces.data(), pieces.size() * sizeof(pieces[0]));
     });
     primIds_ = ClUpload(cl_, "primitive ids", ids.data(), ids.size() * sizeof(std::uint32_t));
+    const std::vector<float> motion = scene_.UnifiedMotion();
+    motion_ = motion.empty() ? dummy_ : ClUpload(cl_, "motion", motion.data(), motion.size() * sizeof(float));
     for (auto& b : accel_) b = dummy_;
     // The built structure's header, nodes and references (the others keep
     // the placeholder).
@@ -345,6 +361,14 @@ class ClTracer final : public Tracer {
   }
 
   // Ray, hit and counter buffers for n rays (grown, never shrunk).
+  void EnsureTimeBuffer(std::size_t n)
+  {
+    if (n > timeCapacity_) {
+      timeBuf_ = ClAlloc(cl_, "ray times", n * sizeof(float), CL_MEM_READ_ONLY);
+      timeCapacity_ = n;
+    }
+  }
+
   void EnsureRayBuffers(std::size_t n, bool withRays)
   {
     if (withRays && n > rayCapacity_) {
@@ -386,7 +410,8 @@ class ClTracer final : public Tracer {
   bool generic_ = false;
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
-  cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_;
+  cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_, motion_, timeBuf_;
+  std::size_t timeCapacity_ = 0;
   cl::Event lastLaunch_;
   double lastKernelMs_ = -1.0;
   cl::Buffer accel_[3 * CR_NUM_ACCEL_TYPES];  // per structure: header, nodes, references

@@ -65,9 +65,11 @@ Run RegisterRays(CLI::App& app)
     if (g.spdCorners && g.kind != RayKind::Primary) throw InputError("--spd-corners applies to --kind primary only");
     Scene scene = LoadScene(o->scene);
     ref::ReferenceTracer tracer(scene);
-    std::vector<RayRecord> rays = GenerateRays(scene, tracer, g);
-    WriteRays(o->out, rays);
-    nlohmann::json j{{"scene", o->scene}, {"kind", o->kind}, {"rays", rays.size()}, {"output", o->out}};
+    std::vector<float> times;  // a scene with motion: CRRAYS02, a time per ray
+    std::vector<RayRecord> rays = GenerateRays(scene, tracer, g, &times);
+    WriteRays(o->out, rays, times);
+    nlohmann::json j{{"scene", o->scene}, {"kind", o->kind},           {"rays", rays.size()},
+                     {"output", o->out},  {"timed", !times.empty()}};
     std::cout << j.dump() << std::endl;
     return 0;
   };
@@ -103,8 +105,9 @@ Run RegisterTrace(CLI::App& app)
     Scene scene = LoadScene(o->scene);
     int width = 0, height = 0;
     std::vector<RayRecord> rays;
+    std::vector<float> rayTimes;  // CRRAYS02: one per ray
     if (o->primary.empty())
-      rays = ReadRays(o->rays);
+      rays = ReadRays(o->rays, &rayTimes);
     else
       ParseSize(o->primary, width, height);
     const std::size_t nRays = o->primary.empty() ? rays.size() : std::size_t(width) * std::size_t(height);
@@ -118,7 +121,7 @@ Run RegisterTrace(CLI::App& app)
       TraceStatsSum* sp = (r == 0 && o->stats) ? &stats : nullptr;
       auto t0 = std::chrono::steady_clock::now();
       if (o->primary.empty())
-        tracer->Trace(rays, hits, o->occlusion, sp);
+        tracer->Trace(rays, rayTimes, hits, o->occlusion, sp);
       else
         tracer->TracePrimary(frame, width, height, hits, sp);
       times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
@@ -204,11 +207,12 @@ Run RegisterCheck(CLI::App& app)
   return [o]() {
     auto limit = LimitThreads(o->threads);
     Scene scene = LoadScene(o->scene);
-    std::vector<RayRecord> rays = ReadRays(o->rays);
+    std::vector<float> rayTimes;
+    std::vector<RayRecord> rays = ReadRays(o->rays, &rayTimes);
     std::vector<HitRecord> hits = ReadHits(o->hits);
     CheckCount(o->rays, rays.size(), o->hits, hits.size());
     ref::ReferenceTracer tracer(scene);
-    ref::CheckResult r = ref::CheckHits(tracer, rays, hits, o->occlusion);
+    ref::CheckResult r = ref::CheckHits(tracer, rays, hits, o->occlusion, rayTimes);
     nlohmann::json j{{"scene", o->scene},
                      {"query", o->occlusion ? "occlusion" : "closest"},
                      {"rays", r.rays},

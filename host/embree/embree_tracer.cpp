@@ -56,6 +56,7 @@ class EmbreeTracer final : public Tracer {
                                    "backends (--variant single-robust selects RTC_SCENE_FLAG_ROBUST)",
                                    PrecisionName(cfg.precision)));
     if (cfg.stats) throw InputError("--backend embree: Embree does not count Havran's measures (drop --stats)");
+    if (scene.hasMotion) throw InputError("--backend embree: scenes with motion are not supported yet");
     embree::EmbreeOptions opt;
     opt.robust = robust_;
     es_ = std::make_unique<EmbreeScene>(scene, opt);
@@ -66,7 +67,9 @@ class EmbreeTracer final : public Tracer {
     info_.params = fmt::format("embree {} build=medium flags={}", RTC_VERSION_STRING, robust_ ? "robust" : "none");
   }
 
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum*) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());
     if (packet_) {

@@ -18,7 +18,8 @@ static_assert(std::endian::native == std::endian::little, "the interchange forma
 namespace {
 
 template <typename Record>
-std::vector<Record> ReadRecords(const std::string& path, const char (&magic)[8], const char* kind)
+std::vector<Record> ReadRecords(const std::string& path, const char (&magic)[8], const char* kind,
+                                std::vector<char>* headerOut = nullptr)
 {
   const std::size_t size = FileSize(path);
   std::ifstream in(path, std::ios::binary);
@@ -26,7 +27,7 @@ std::vector<Record> ReadRecords(const std::string& path, const char (&magic)[8],
   char header[16];
   if (size < 16 || !in.read(header, 16))
     throw InputError(path, 0, fmt::format("truncated: {} bytes, a {} file has a 16-byte header", size, kind));
-  if (std::memcmp(header, magic, 8) != 0)
+  if (std::memcmp(header, magic, 8) != 0 && !(headerOut && std::memcmp(header, kRaysTimedMagic, 8) == 0))
     throw InputError(path, 0, fmt::format("wrong magic: not a {} file (expected '{}')", kind, std::string(magic, 8)));
   std::uint64_t count = 0;
   std::memcpy(&count, header + 8, 8);
@@ -39,8 +40,16 @@ std::vector<Record> ReadRecords(const std::string& path, const char (&magic)[8],
   std::vector<Record> out(static_cast<std::size_t>(count));
   if (count && !in.read(reinterpret_cast<char*>(out.data()), static_cast<std::streamsize>(payload)))
     throw InputError(path, 0, "cannot read the records");
+  if (headerOut) headerOut->assign(header, header + 16);
   return out;
 }
+
+// A CRRAYS02 record: a ray and its time (FORMATS.md extensions).
+struct TimedRay {
+  RayRecord ray;
+  float time;
+};
+static_assert(sizeof(TimedRay) == 36);
 
 template <typename Record>
 void WriteRecords(const std::string& path, const char (&magic)[8], const std::vector<Record>& recs)
@@ -76,9 +85,37 @@ std::string ValidateRay(const RayRecord& r)
   return {};
 }
 
-std::vector<RayRecord> ReadRays(const std::string& path)
+std::vector<RayRecord> ReadRays(const std::string& path, std::vector<float>* times)
 {
-  auto rays = ReadRecords<RayRecord>(path, kRaysMagic, ".rays");
+  if (times) times->clear();
+  // The magic decides the record size: peek at it.
+  std::vector<RayRecord> rays;
+  char magic[8] = {};
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, 0, "cannot open");
+    in.read(magic, 8);
+  }
+  if (std::memcmp(magic, kRaysTimedMagic, 8) == 0) {
+    std::vector<char> header;
+    const auto timed = ReadRecords<TimedRay>(path, kRaysTimedMagic, ".rays", &header);
+    rays.resize(timed.size());
+    bool anyTime = false;
+    for (std::size_t i = 0; i < timed.size(); ++i) {
+      rays[i] = timed[i].ray;
+      const float tau = timed[i].time;
+      if (!(tau >= 0.0f && tau <= 1.0f)) throw InputError::Record(path, i, fmt::format("time {} is not in [0, 1]", tau));
+      anyTime = anyTime || tau != 0.0f;
+    }
+    if (times) {
+      times->resize(timed.size());
+      for (std::size_t i = 0; i < timed.size(); ++i) (*times)[i] = timed[i].time;
+    } else if (anyTime) {
+      throw InputError(path, 0, "rays with times (CRRAYS02): this use of the file takes CRRAYS01 rays only");
+    }
+  } else {
+    rays = ReadRecords<RayRecord>(path, kRaysMagic, ".rays");
+  }
   for (std::size_t i = 0; i < rays.size(); ++i) {
     std::string bad = ValidateRay(rays[i]);
     if (!bad.empty()) throw InputError::Record(path, i, bad);
@@ -86,13 +123,25 @@ std::vector<RayRecord> ReadRays(const std::string& path)
   return rays;
 }
 
-void WriteRays(const std::string& path, const std::vector<RayRecord>& rays)
+void WriteRays(const std::string& path, const std::vector<RayRecord>& rays, const std::vector<float>& times)
 {
   for (std::size_t i = 0; i < rays.size(); ++i) {
     std::string bad = ValidateRay(rays[i]);
     if (!bad.empty()) throw RuntimeError(fmt::format("{}: refusing to write invalid ray {}: {}", path, i, bad));
   }
-  WriteRecords(path, kRaysMagic, rays);
+  if (times.empty()) {
+    WriteRecords(path, kRaysMagic, rays);
+    return;
+  }
+  if (times.size() != rays.size())
+    throw RuntimeError(fmt::format("{}: {} times for {} rays", path, times.size(), rays.size()));
+  std::vector<TimedRay> timed(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (!(times[i] >= 0.0f && times[i] <= 1.0f))
+      throw RuntimeError(fmt::format("{}: refusing to write ray {} with time {} outside [0, 1]", path, i, times[i]));
+    timed[i] = TimedRay{rays[i], times[i]};
+  }
+  WriteRecords(path, kRaysTimedMagic, timed);
 }
 
 std::vector<HitRecord> ReadHits(const std::string& path)

@@ -85,13 +85,15 @@ std::vector<AreaLight> SoftLights(const Scene& scene)
 }
 
 // Secondary rays of one primary sample.
-void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind, const RayRecord& primary,
+// `time`: the sample's time in the shutter interval (0 for a static scene).
+void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind, const RayRecord& primary, float time,
                std::uint64_t seed, std::uint64_t sample, const std::vector<AreaLight>& soft, std::vector<RayRecord>& out)
 {
   ref::DRay r = ref::MakeRay(primary);
+  r.time = time;
   ref::RefHit h = tr.Intersect(r);
   if (!h.Found()) return;
-  const SurfacePoint sp = SurfaceAt(scene, h.g, r.o + h.t * r.d, h.u, h.v);
+  const SurfacePoint sp = SurfaceAt(scene, h.g, r.o + h.t * r.d, h.u, h.v, time);
   glm::dvec3 ng(sp.ng), ns(sp.ns);
   if (glm::dot(ng, r.d) > 0.0) ng = -ng;  // face the viewer
   if (glm::dot(ns, r.d) > 0.0) ns = -ns;
@@ -122,9 +124,10 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
     if (kind == RayKind::Path) {
       // Follow it to its hit and bounce once more.
       ref::DRay r2 = ref::MakeRay(dr);
+      r2.time = time;
       ref::RefHit h2 = tr.Intersect(r2);
       if (!h2.Found()) return;
-      const SurfacePoint s2 = SurfaceAt(scene, h2.g, r2.o + h2.t * r2.d, h2.u, h2.v);
+      const SurfacePoint s2 = SurfaceAt(scene, h2.g, r2.o + h2.t * r2.d, h2.u, h2.v, time);
       glm::dvec3 n2(s2.ng);
       if (glm::dot(n2, r2.d) > 0.0) n2 = -n2;
       df = ToF(CosineAbout(n2, seed, 14, sample));
@@ -137,8 +140,14 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
 
 }  // namespace
 
-std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tr, const RayGenOptions& opt)
+std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tr, const RayGenOptions& opt,
+                                    std::vector<float>* times)
 {
+  // A sample's time: uniform in the shutter for a scene with motion (and
+  // times wanted), else 0.
+  const bool timed = times && scene.hasMotion;
+  if (times) times->clear();
+  auto timeOf = [&](std::uint64_t sample) { return timed ? float(ToUnit(HashRandom(opt.seed, 41, sample))) : 0.0f; };
   const int w = opt.width > 0 ? opt.width : scene.camera.width;
   const int h = opt.height > 0 ? opt.height : scene.camera.height;
   const CameraFrame frame = MakeCameraFrame(scene.camera, w, h);
@@ -158,6 +167,8 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
     tbb::parallel_for(0, ny, [&](int y) {
       for (int x = 0; x < nx; ++x) rays[std::size_t(y) * nx + x] = PrimaryRay(frame, x + off, y + off);
     });
+    if (timed)
+      for (std::size_t i = 0; i < rays.size(); ++i) times->push_back(timeOf(i));
     return rays;
   }
   if (opt.kind == RayKind::Random) {
@@ -174,6 +185,8 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
       if (d == glm::vec3(0.0f)) d = glm::vec3(0.0f, 0.0f, 1.0f);
       rays[i] = Make(o, d, 0.0f, INFINITY);
     });
+    if (timed)
+      for (std::size_t i = 0; i < rays.size(); ++i) times->push_back(timeOf(i));
     return rays;
   }
 
@@ -183,16 +196,21 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
   const std::vector<AreaLight> soft = opt.kind == RayKind::Soft ? SoftLights(scene) : std::vector<AreaLight>{};
   for (int pass = 0; pass < 64 && rays.size() < target; ++pass) {
     std::vector<std::vector<RayRecord>> perRow(static_cast<std::size_t>(h));
+    std::vector<std::vector<float>> rowTimes(static_cast<std::size_t>(h));
     tbb::parallel_for(0, h, [&](int y) {
       auto& row = perRow[static_cast<std::size_t>(y)];
       for (int x = 0; x < w; ++x) {
         const std::uint64_t sample = std::uint64_t(pass) * perPass + std::uint64_t(y) * w + x;
         double jx = pass ? ToUnit(HashRandom(opt.seed, 31, sample)) - 0.5 : 0.0;
         double jy = pass ? ToUnit(HashRandom(opt.seed, 32, sample)) - 0.5 : 0.0;
-        Secondary(scene, tr, opt.kind, PrimaryRay(frame, x + jx, y + jy), opt.seed, sample, soft, row);
+        const float time = timeOf(sample);
+        Secondary(scene, tr, opt.kind, PrimaryRay(frame, x + jx, y + jy), time, opt.seed, sample, soft, row);
+        if (timed) rowTimes[static_cast<std::size_t>(y)].resize(row.size(), time);
       }
     });
     for (auto& row : perRow) rays.insert(rays.end(), row.begin(), row.end());
+    if (timed)
+      for (auto& t : rowTimes) times->insert(times->end(), t.begin(), t.end());
   }
   if (rays.empty())
     throw InputError(scene.path, 0,
@@ -202,6 +220,7 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
     Warn(fmt::format("{}: only {} {} rays after 64 passes (asked for {})", scene.path, rays.size(),
                      RayKindName(opt.kind), target));
   if (rays.size() > target) rays.resize(target);
+  if (timed) times->resize(rays.size());
   return rays;
 }
 

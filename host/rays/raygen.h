@@ -39,7 +39,12 @@ struct RayGenOptions {
 // tracer and of --diffuse's gather rays' successors). Random: origins uniform in the scene box,
 // directions uniform on the sphere. Secondary kinds loop over jittered
 // primary passes until `count` rays exist (at most 64 passes).
-std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tracer, const RayGenOptions& opt);
+// A scene with motion (NFF `motion`) gives every primary sample a time,
+// uniform in the shutter interval, which its secondary rays keep; they go to
+// `times` (one per ray; left empty for a static scene, or when times is null:
+// then every ray is at time 0).
+std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTracer& tracer, const RayGenOptions& opt,
+                                    std::vector<float>* times = nullptr);
 
 // Counter-based random numbers: the same (seed, stream, index) always gives
 // the same value, whatever the thread schedule.

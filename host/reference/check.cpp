@@ -17,7 +17,11 @@ namespace {
 
 // The tolerance of check.h at t: the ray's magnitudes up to t, nothing of
 // the scene or the primitive.
-double Delta(const DRay& r, double t) { return CheckDelta(MaxAbs(r.o), MaxAbs(r.d), t); }
+// A ray shifted into a moving primitive's frame (ReferenceTracer::Framed)
+// counts its origin as |o'| + 2 |shift|: the world origin's magnitude is at
+// most |o'| + |shift|, and a float tracer rounds o - shift at the scale
+// |o| + |shift|.
+double Delta(const DRay& r, double t) { return CheckDelta(MaxAbs(r.o) + 2.0 * r.shift, MaxAbs(r.d), t); }
 
 // The slack of primitive `prim` (HitSlack, host/prims/prim_host.h): 0 but
 // for an SDF block, whose hits lie within its eps of the surface by
@@ -53,6 +57,10 @@ void Perpendiculars(const glm::dvec3& d, glm::dvec3& e1, glm::dvec3& e2)
   e1 = glm::normalize(glm::cross(n, a));
   e2 = glm::cross(n, e1);
 }
+
+// Marginal, PossiblyMeets and NearRay take the ray in the primitive's frame
+// (ReferenceTracer::Framed: time 0, the primitive at rest), so that the
+// rays they derive from it need no time.
 
 // A hit at t on primitive `prim` is marginal when it lies within delta of the
 // ray's ends or when some ray shifted sideways by delta misses the primitive.
@@ -128,8 +136,19 @@ bool NearRay(const ReferenceTracer& tr, std::uint32_t prim, const DRay& r)
 Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRecord& hit, bool occlusion, double* relErr,
                    std::vector<RefHit>& all)
 {
+  return Adjudicate(tr, rec, 0.0f, hit, occlusion, relErr, all);
+}
+
+Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, float time, const HitRecord& hit, bool occlusion,
+                   double* relErr, std::vector<RefHit>& all)
+{
   const Scene& scene = tr.GetScene();
-  const DRay r = MakeRay(rec);
+  DRay r = MakeRay(rec);
+  r.time = time;
+  // The ray in primitive p's frame (a moving primitive's rest frame), and
+  // the tolerance there.
+  auto framed = [&](std::uint32_t p) { return tr.Framed(p, r); };
+  auto deltaOn = [&](std::uint32_t p, double t) { return Delta(framed(p), t) + Slack(tr, p); };
   const double dl = glm::length(r.d);
   *relErr = -1.0;
   const bool testHit = hit.prim != CR_NO_HIT;
@@ -139,7 +158,7 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   auto missVerdict = [&]() {
     tr.AllHits(r, all);
     for (const RefHit& h : all)
-      if (!Marginal(tr, tr.IdOfHit(h), r, h.t, Delta(r, h.t) + Slack(tr, tr.IdOfHit(h))))
+      if (!Marginal(tr, tr.IdOfHit(h), framed(tr.IdOfHit(h)), h.t, deltaOn(tr.IdOfHit(h), h.t)))
         return Verdict::WrongMissed;
     return Verdict::Flip;
   };
@@ -152,7 +171,8 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
       // Scale delta by where the primitive is along the ray (NearRay scales
       // it point by point).
       double far = std::isfinite(r.tmax) ? r.tmax : (any.Found() ? any.t : 0.0);
-      const bool near = PossiblyMeets(tr, hit.prim, r, Delta(r, far) + Slack(tr, hit.prim)) || NearRay(tr, hit.prim, r);
+      const bool near =
+          PossiblyMeets(tr, hit.prim, framed(hit.prim), deltaOn(hit.prim, far)) || NearRay(tr, hit.prim, framed(hit.prim));
       if (!near) return Verdict::WrongNotOnPrim;
       // Occluded is the right answer when the reference finds an occluder
       // too (the named one is off by less than delta: a tie); when it finds
@@ -166,14 +186,14 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   RefHit ref = tr.Intersect(r);
   if (!testHit) return ref.Found() ? missVerdict() : Verdict::Agree;
   const double t = hit.t;
-  const double delta = Delta(r, t) + Slack(tr, hit.prim);
+  const double delta = deltaOn(hit.prim, t);
   if (ref.Found() && tr.IdOfHit(ref) == hit.prim && std::fabs(t - ref.t) * dl <= delta) {
     *relErr = ref.t > 0.0 ? std::fabs(t - ref.t) / ref.t : std::fabs(t - ref.t);
     return Verdict::Agree;
   }
   // The reported point must be on the reported primitive and inside the ray.
   if (!(t >= r.tmin - delta / dl && (t <= r.tmax + delta / dl))) return Verdict::WrongNotOnPrim;
-  const glm::dvec3 p = r.o + t * r.d;
+  const glm::dvec3 p = framed(hit.prim).o + t * r.d;
   if (!(tr.DistanceToPrim(hit.prim, p) <= delta)) return Verdict::WrongNotOnPrim;
   // A hit where the reference finds none: the ray passes within delta of
   // the reported surface, a flip.
@@ -182,15 +202,15 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, const HitRec
   tr.AllHits(r, all);
   for (const RefHit& h : all) {
     const std::uint32_t hp = tr.IdOfHit(h);
-    const double deltaH = Delta(r, h.t) + Slack(tr, hp);
+    const double deltaH = deltaOn(hp, h.t);
     if ((t - h.t) * dl <= std::max(delta, deltaH)) continue;
-    if (!Marginal(tr, hp, r, h.t, deltaH)) return Verdict::WrongFarther;
+    if (!Marginal(tr, hp, framed(hp), h.t, deltaH)) return Verdict::WrongFarther;
   }
   return Verdict::Tie;
 }
 
 CheckResult CheckHits(const ReferenceTracer& tr, const std::vector<RayRecord>& rays, const std::vector<HitRecord>& hits,
-                      bool occlusion)
+                      bool occlusion, const std::vector<float>& times)
 {
   CheckResult res;
   res.rays = rays.size();
@@ -199,7 +219,8 @@ CheckResult CheckHits(const ReferenceTracer& tr, const std::vector<RayRecord>& r
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& br) {
     std::vector<RefHit> scratch;
     for (std::size_t i = br.begin(); i != br.end(); ++i)
-      verdict[i] = static_cast<std::uint8_t>(Adjudicate(tr, rays[i], hits[i], occlusion, &err[i], scratch));
+      verdict[i] = static_cast<std::uint8_t>(
+          Adjudicate(tr, rays[i], times.empty() ? 0.0f : times[i], hits[i], occlusion, &err[i], scratch));
   });
   double sumErr = 0.0;
   std::uint64_t nErr = 0;

@@ -67,10 +67,16 @@ struct CheckResult {
 // Verdict for one ray; relErr set for agreeing closest hits.
 enum class Verdict { Agree, Tie, Flip, WrongMissed, WrongFarther, WrongNotOnPrim };
 inline bool IsWrong(Verdict v) { return v != Verdict::Agree && v != Verdict::Tie && v != Verdict::Flip; }
+// With a time: the ray at that time in the shutter interval (motion blur;
+// each primitive is judged in its own frame, ReferenceTracer::Framed).
 Verdict Adjudicate(const ReferenceTracer& tracer, const RayRecord& ray, const HitRecord& hit, bool occlusion,
                    double* relErr, std::vector<RefHit>& scratch);
+Verdict Adjudicate(const ReferenceTracer& tracer, const RayRecord& ray, float time, const HitRecord& hit,
+                   bool occlusion, double* relErr, std::vector<RefHit>& scratch);
 
+// times: empty (every ray at time 0) or one per ray.
 CheckResult CheckHits(const ReferenceTracer& tracer, const std::vector<RayRecord>& rays,
-                      const std::vector<HitRecord>& hits, bool occlusion);
+                      const std::vector<HitRecord>& hits, bool occlusion,
+                      const std::vector<float>& times = std::vector<float>());
 
 }  // namespace cr::ref

@@ -17,6 +17,13 @@ struct DRay {
   double tmin = 0.0, tmax = 0.0;
   int kx = 0, ky = 1, kz = 2;
   double sx = 0.0, sy = 0.0, sz = 1.0;
+  // Time in the shutter interval (motion blur): a moving piece meets the ray
+  // shifted into its rest frame (ReferenceTracer::PieceRay). shift: the
+  // largest component of the shift that made this ray (0 for a ray in the
+  // world frame), which check's tolerance adds to |o| (a float tracer rounds
+  // the shifted origin at that scale).
+  double time = 0.0;
+  double shift = 0.0;
 };
 
 DRay MakeRay(const RayRecord& r);

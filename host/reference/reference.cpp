@@ -24,6 +24,17 @@ ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), ranges_(sc
   std::vector<glm::dvec3> lo(n), hi(n);
   for (std::uint32_t g = 0; g < n; ++g)
     scene.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { RefBounds(piece, lo[g], hi[g]); });
+  if (scene.hasMotion) {
+    // A moving piece's box swept over the shutter, rounded outward.
+    motion_.resize(n);
+    for (std::uint32_t g = 0; g < n; ++g) {
+      motion_[g] = glm::dvec3(scene.MotionOfUnified(g));
+      for (int a = 0; a < 3; ++a) {
+        lo[g][a] = std::min(lo[g][a], std::nextafter(lo[g][a] + motion_[g][a], -INFINITY));
+        hi[g][a] = std::max(hi[g][a], std::nextafter(hi[g][a] + motion_[g][a], INFINITY));
+      }
+    }
+  }
   order_.resize(n);
   std::iota(order_.begin(), order_.end(), 0u);
   nodes_.reserve(n ? 2 * n / kLeafSize + 2 : 1);
@@ -103,15 +114,40 @@ void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) con
   }
 }
 
+namespace {
+DRay Shifted(const DRay& ray, const glm::dvec3& m)
+{
+  if (ray.time == 0.0 || m == glm::dvec3(0.0)) return ray;
+  DRay r = ray;
+  const glm::dvec3 s = ray.time * m;
+  r.o -= s;
+  r.time = 0.0;
+  r.shift += std::max({std::fabs(s.x), std::fabs(s.y), std::fabs(s.z)});
+  return r;
+}
+}  // namespace
+
+DRay ReferenceTracer::PieceRay(std::uint32_t g, const DRay& ray) const
+{
+  return motion_.empty() ? ray : Shifted(ray, motion_[g]);
+}
+
+DRay ReferenceTracer::Framed(std::uint32_t prim, const DRay& ray) const
+{
+  return motion_.empty() || prim >= scene_.NumPrims() ? ray : Shifted(ray, glm::dvec3(scene_.prims[prim].motion));
+}
+
 int ReferenceTracer::PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u, double* v) const
 {
-  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefRoots(ray, piece, t, u, v); });
+  const DRay r = PieceRay(g, ray);
+  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefRoots(r, piece, t, u, v); });
 }
 
 int ReferenceTracer::PrimRoots(std::uint32_t prim, std::uint32_t g, const DRay& ray, double t[2]) const
 {
   const std::uint32_t part = scene_.prims[prim].part;
-  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefPartRoots(ray, piece, part, t); });
+  const DRay r = PieceRay(g, ray);
+  return scene_.Visit(ranges_, g, [&](const auto& piece, std::uint32_t) { return RefPartRoots(r, piece, part, t); });
 }
 
 RefHit ReferenceTracer::Intersect(const DRay& ray) const

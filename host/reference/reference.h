@@ -33,15 +33,21 @@ class ReferenceTracer {
   RefHit IntersectP(const DRay& ray) const;
   // Every root of every piece in [tmin, tmax] (unsorted).
   void AllHits(const DRay& ray, std::vector<RefHit>& out) const;
-  // Roots of one piece in [tmin, tmax]; returns their count (<= 2).
+  // The ray as piece g / primitive id `prim` sees it at the ray's time: its
+  // origin shifted by -time * motion into the rest frame of the piece's
+  // geometry, time 0 (the ray itself for a static piece or time 0).
+  DRay PieceRay(std::uint32_t g, const DRay& ray) const;
+  DRay Framed(std::uint32_t prim, const DRay& ray) const;
+  // Roots of one piece in [tmin, tmax] at the ray's time; returns their count (<= 2).
   int PieceRoots(std::uint32_t g, const DRay& ray, double t[2], double* u = nullptr, double* v = nullptr) const;
   // Roots of primitive id `prim` on its piece g: PieceRoots, or for a part
   // of a piece (a CSG leaf) the roots where that part bounds the piece.
   int PrimRoots(std::uint32_t prim, std::uint32_t g, const DRay& ray, double t[2]) const;
   // The primitive id a hit names (a CSG solid's leaf, by its u).
   std::uint32_t IdOfHit(const RefHit& h) const { return scene_.IdOfHit(h.g, h.u); }
-  // Distance from p to the surface of primitive id `prim` (all its pieces);
-  // INFINITY for an id without geometry.
+  // Distance from p to the surface of primitive id `prim` (all its pieces,
+  // at rest: a point of a moving primitive's frame, Framed); INFINITY for an
+  // id without geometry.
   double DistanceToPrim(std::uint32_t prim, const glm::dvec3& p) const;
   // Largest coordinate magnitude of the points defining primitive `prim`
   // (vertices; centre, base and apex plus radii): the scale of the rounding
@@ -79,6 +85,7 @@ class ReferenceTracer {
   PrimRanges ranges_{};
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> order_;
+  std::vector<glm::dvec3> motion_;  // per unified piece; empty for a static scene
 };
 
 }  // namespace cr::ref

@@ -21,6 +21,8 @@ struct KernelArgs {
 #undef CR_KERNEL_ARGS_ARRAY_
   const std::uint32_t* primIds = nullptr;  // by unified index
   const RayRecord* rays = nullptr;
+  const float* times = nullptr;   // per ray, or null: every ray at time 0
+  const float* motion = nullptr;  // Scene::UnifiedMotion, or null: a static scene
   HitRecord* hits = nullptr;
   bool unifiedHits = false;  // TraceConfig::unifiedHits
 };

@@ -27,14 +27,15 @@ TraceRangeFn Pick(Precision p, bool stats)
 class ScalarTracer final : public Tracer {
  public:
   ScalarTracer(const Scene& scene, const TraceConfig& cfg)
-      : scene_(scene), config_(cfg), data_(BuildAccel(scene, cfg.accel, cfg.params)), primIds_(scene.UnifiedIds())
+      : scene_(scene), config_(cfg), data_(BuildAccel(scene, cfg.accel, cfg.params)), primIds_(scene.UnifiedIds()), motion_(scene.UnifiedMotion())
   {
     info_ = data_.info;
     fn_ = Pick(cfg.precision, cfg.stats);
   }
 
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-             TraceStatsSum* stats) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());
     KernelArgs a;
@@ -46,6 +47,8 @@ class ScalarTracer final : public Tracer {
 #undef CR_SCALAR_ARRAY_
     a.primIds = primIds_.data();
     a.rays = rays.data();
+    a.times = times.empty() ? nullptr : times.data();
+    a.motion = motion_.empty() ? nullptr : motion_.data();
     a.hits = hits.data();
     a.unifiedHits = config_.unifiedHits;
     tbb::enumerable_thread_specific<TraceStatsSum> local;
@@ -65,6 +68,7 @@ class ScalarTracer final : public Tracer {
   TraceConfig config_;
   AccelData data_;
   std::vector<std::uint32_t> primIds_;
+  std::vector<float> motion_;  // Scene::UnifiedMotion, empty for a static scene
   TraceRangeFn fn_ = nullptr;
 };
 

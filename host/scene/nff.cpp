@@ -198,6 +198,7 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
   Lexer lx(text, name);
   if (scene.materials.empty()) scene.materials.push_back(Material{});
   std::uint32_t material = 0;
+  glm::vec3 motion(0.0f);  // the current `motion`
   bool anyStatement = false;
   while (auto tok = lx.Next()) {
     const long line = tok->line;
@@ -241,6 +242,11 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
       if (!(f > 0.0) || !std::isfinite(f)) lx.Fail(line, fmt::format("'lens': focal distance {} is not > 0", f));
       scene.camera.aperture = float(a);
       scene.camera.focal = float(f);
+    } else if (kw == "motion") {
+      const glm::dvec3 m = Vec(lx, "motion", line, "a displacement component");
+      if (!std::isfinite(m.x) || !std::isfinite(m.y) || !std::isfinite(m.z))
+        lx.Fail(line, "'motion': the displacement is not finite");
+      motion = F(m);
     } else if (kw == "b") {
       scene.background = F(Vec(lx, "b", line, "a background colour component"));
     } else if (kw == "l") {
@@ -254,7 +260,17 @@ void ParseNFF(std::string_view text, const std::string& name, Scene& scene, bool
     } else {
       // Geometry: the statement of some primitive type (host/prims/).
       LexerStatement st(lx, kw, line, material);
-      if (!ParseAreaLight(st, scene) && !ReadGeometry(st, scene)) lx.Fail(line, fmt::format("unknown statement '{}'", kw));
+      const std::size_t before = scene.prims.size();
+      if (ParseAreaLight(st, scene)) {
+        if (motion != glm::vec3(0.0f))
+          lx.Fail(line, fmt::format("'{}': an area light cannot move (end the motion with 'motion 0 0 0' before it)", kw));
+      } else if (!ReadGeometry(st, scene)) {
+        lx.Fail(line, fmt::format("unknown statement '{}'", kw));
+      }
+      if (motion != glm::vec3(0.0f)) {
+        for (std::size_t i = before; i < scene.prims.size(); ++i) scene.prims[i].motion = motion;
+        scene.hasMotion = true;
+      }
     }
   }
   if (!anyStatement) throw InputError(name, 0, viewOnly ? "empty view file" : "empty scene file");

@@ -68,9 +68,25 @@ std::vector<std::uint32_t> Scene::UnifiedIds() const
   return ids;
 }
 
+namespace {
+// b together with b translated by m: the box a piece sweeps over the
+// shutter (a translation is linear in time, so its ends bound it), the
+// moved corners rounded outward.
+Bounds Swept(Bounds b, const glm::vec3& m)
+{
+  if (m == glm::vec3(0.0f) || b.Empty()) return b;
+  for (int a = 0; a < 3; ++a) {
+    b.lo[a] = std::min(b.lo[a], FloatDown(double(b.lo[a]) + double(m[a])));
+    b.hi[a] = std::max(b.hi[a], FloatUp(double(b.hi[a]) + double(m[a])));
+  }
+  return b;
+}
+}  // namespace
+
 Bounds Scene::UnifiedBounds(std::uint32_t g) const
 {
-  return Visit(g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); });
+  const Bounds b = Visit(g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); });
+  return hasMotion ? Swept(b, MotionOfUnified(g)) : b;
 }
 
 Bounds Scene::WorldBounds() const
@@ -78,9 +94,21 @@ Bounds Scene::WorldBounds() const
   Bounds b;
   const PrimRanges r = Ranges();
   const std::uint32_t n = r.begin[CR_NUM_PRIM_TYPES];
-  for (std::uint32_t g = 0; g < n; ++g)
-    b.Extend(Visit(r, g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); }));
+  for (std::uint32_t g = 0; g < n; ++g) {
+    const Bounds pb = Visit(r, g, [](const auto& piece, std::uint32_t) { return FloatBounds(piece); });
+    b.Extend(hasMotion ? Swept(pb, MotionOfUnified(g)) : pb);
+  }
   return b;
+}
+
+std::vector<float> Scene::UnifiedMotion() const
+{
+  if (!hasMotion) return {};
+  const std::vector<std::uint32_t> ids = UnifiedIds();
+  std::vector<float> m(4 * ids.size(), 0.0f);
+  for (std::size_t g = 0; g < ids.size(); ++g)
+    for (int a = 0; a < 3; ++a) m[4 * g + a] = prims[ids[g]].motion[a];
+  return m;
 }
 
 std::uint32_t Scene::CountKind(PrimKind kind, std::uint32_t type) const

@@ -71,6 +71,10 @@ struct PrimInfo {
   // one piece, leaf k with part k (its id is the piece's id + k); 0 for
   // every other statement.
   std::uint32_t part = 0;
+  // NFF `motion dx dy dz` (docs/FORMATS.md): the statement's displacement
+  // over the shutter interval; at ray time tau its pieces lie translated by
+  // tau * motion. Zero for a static statement.
+  glm::vec3 motion{0.0f};
 };
 // "sphere", "polygon", ...: the statement's kind, or its type for a shape.
 const char* PrimInfoName(const PrimInfo& info);
@@ -122,6 +126,7 @@ struct Scene {
 #undef CR_SCENE_ARRAY_
   std::vector<std::uint32_t> pieceIds[CR_NUM_PRIM_TYPES];
   std::vector<TriNormals> triNormals;  // per triangle when any patch exists, else empty
+  bool hasMotion = false;               // some statement moves (PrimInfo::motion != 0)
 
   // Appends a piece of primitive id `id`; returns its index in its array.
   template <class T>
@@ -167,12 +172,18 @@ struct Scene {
   std::uint32_t IdOfHit(std::uint32_t g, double u) const;
   // Scene-file id of every unified index, in order.
   std::vector<std::uint32_t> UnifiedIds() const;
-  // Tight bounds of primitive g / of all geometry.
+  // Tight bounds of primitive g / of all geometry; for a moving piece, the
+  // box it sweeps over the shutter interval (rounded outward).
   Bounds UnifiedBounds(std::uint32_t g) const;
   Bounds WorldBounds() const;
   // Statement counts by kind and type (tests assert them against the SPD table).
   std::uint32_t CountKind(PrimKind kind, std::uint32_t type) const;
   bool HasPatchNormals() const { return !triNormals.empty(); }
+  // Motion of unified piece g (its statement's), and of every piece as the
+  // kernels read it (kernels/motion.h: 4 floats per piece, dx dy dz 0);
+  // empty for a static scene.
+  glm::vec3 MotionOfUnified(std::uint32_t g) const { return hasMotion ? prims[IdOfUnified(g)].motion : glm::vec3(0.0f); }
+  std::vector<float> UnifiedMotion() const;
   const Material& MaterialOf(std::uint32_t primId) const { return materials[prims[primId].material]; }
 };
 

@@ -7,15 +7,19 @@
 
 namespace cr {
 
-SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v)
+SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v,
+                       double time)
 {
   SurfacePoint sp;
   double scale = 0.0;
+  // A moving piece: found at rest, then moved to where it is at `time`.
+  const glm::dvec3 shift = time != 0.0 && scene.hasMotion ? time * glm::dvec3(scene.MotionOfUnified(g)) : glm::dvec3(0.0);
   const LocalSurface ls = scene.Visit(g, [&](const auto& piece, std::uint32_t local) {
     scale = Scale(piece);
-    return SurfaceAt(scene, piece, local, pApprox, u, v);
+    return SurfaceAt(scene, piece, local, pApprox - shift, u, v);
   });
-  const glm::dvec3 p = ls.p;
+  const glm::dvec3 p = ls.p + shift;
+  scale += MaxAbs(shift);
   glm::dvec3 ng = ls.ng, ns = ls.ns;
   if (glm::dot(ns, ng) < 0.0) ns = -ns;  // patch normals follow the winding
   const std::uint32_t id = scene.IdOfUnified(g);

@@ -42,8 +42,11 @@ struct SurfacePoint {
 };
 
 // The surface point of a hit on unified piece g near pApprox, with the hit's
-// barycentrics (u weights v1, v weights v2) for triangle pieces.
-SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v);
+// barycentrics (u weights v1, v weights v2) for triangle pieces, at the
+// ray's time (a moving piece lies translated by time * motion, and the
+// error bounds grow by the rounding of that shift: kernels/motion.h).
+SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pApprox, double u, double v,
+                       double time = 0.0);
 
 // Origin for a ray leaving the surface to the side of n (unit, with
 // dot(n, ng) != 0): p moved by `error` along n, each component rounded away

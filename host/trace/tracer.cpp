@@ -119,12 +119,15 @@ class ReferenceBackend final : public Tracer {
     info_.nodes = tracer_->NodeCount();
     info_.params = "fp64 median-split bvh";
   }
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum*) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i != r.end(); ++i) {
         ref::DRay ray = ref::MakeRay(rays[i]);
+        if (!times.empty()) ray.time = times[i];
         ref::RefHit h = occlusion ? tracer_->IntersectP(ray) : tracer_->Intersect(ray);
         hits[i] = unifiedHits_ ? tracer_->ToUnifiedRecord(h, occlusion) : tracer_->ToRecord(h, occlusion);
       }
@@ -169,12 +172,13 @@ class FallbackTracer final : public Tracer {
     }
   }
 
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-             TraceStatsSum* stats) override
+  using Tracer::Trace;
+  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+             bool occlusion, TraceStatsSum* stats) override
   {
     // Counters of a failed OpenCL call are not added: stats->Add happens
     // only after its last step, the read-back.
-    Guard([&] { Active().Trace(rays, hits, occlusion, stats); });
+    Guard([&] { Active().Trace(rays, times, hits, occlusion, stats); });
   }
   void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
                     TraceStatsSum* stats) override

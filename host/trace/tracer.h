@@ -59,10 +59,21 @@ struct TraceConfig {
 class Tracer {
  public:
   virtual ~Tracer() = default;
-  // hits[i] answers rays[i] (closest hit, or occlusion per FORMATS.md). stats
-  // is filled only when the tracer was created with stats on.
-  virtual void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion,
-                     TraceStatsSum* stats) = 0;
+  // hits[i] answers rays[i] (closest hit, or occlusion per FORMATS.md) at
+  // time times[i] in the shutter interval [0, 1] (motion blur; `times` empty:
+  // every ray at time 0, as a CRRAYS01 file's rays are). stats is filled
+  // only when the tracer was created with stats on.
+  virtual void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+                     bool occlusion, TraceStatsSum* stats) = 0;
+  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
+  {
+    Trace(rays, NoTimes(), hits, occlusion, stats);
+  }
+  static const std::vector<float>& NoTimes()
+  {
+    static const std::vector<float> none;
+    return none;
+  }
   // Closest hits of the camera's primary rays through the pixel centres of a
   // width x height image (scene/camera.h PrimaryRay), row-major from the
   // top-left. The default generates the rays on the host and calls Trace; a
