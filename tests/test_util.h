@@ -121,6 +121,8 @@ inline std::uint64_t SceneDigest(const Scene& scene)
     mix(&count, sizeof count);
     if (count) mix(pieces.data(), count * sizeof(pieces[0]));
   });
+  const std::vector<float> motion = scene.UnifiedMotion();
+  if (!motion.empty()) mix(motion.data(), motion.size() * sizeof(float));
   return h;
 }
 
@@ -143,7 +145,9 @@ inline const ref::ReferenceTracer& CachedReference(const Scene& scene)
 }
 
 // A ray set of the given kind with about size * size rays.
-inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int size, std::uint64_t seed = 7)
+// times: for a scene with motion, the rays' times (GenerateRays).
+inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int size, std::uint64_t seed = 7,
+                                       std::vector<float>* times = nullptr)
 {
   RayGenOptions g;
   g.kind = kind;
@@ -151,7 +155,7 @@ inline std::vector<RayRecord> MakeRays(const Scene& scene, RayKind kind, int siz
   g.height = size;
   g.seed = seed;
   g.count = std::uint64_t(size) * std::uint64_t(size);
-  return GenerateRays(scene, CachedReference(scene), g);
+  return GenerateRays(scene, CachedReference(scene), g, times);
 }
 
 inline bool IsOcclusion(RayKind kind) { return IsOcclusionKind(kind); }
@@ -170,13 +174,14 @@ inline std::size_t CountDiffering(const std::vector<HitRecord>& a, const std::ve
 
 // Traces `rays` with `config` and checks every answer against the reference.
 inline ref::CheckResult CheckTracer(const Scene& scene, const TraceConfig& config, const std::vector<RayRecord>& rays,
-                                    bool occlusion, std::vector<HitRecord>* hitsOut = nullptr)
+                                    bool occlusion, std::vector<HitRecord>* hitsOut = nullptr,
+                                    const std::vector<float>* times = nullptr)
 {
   auto tracer = CreateTracer(scene, config);
   std::vector<HitRecord> hits;
-  tracer->Trace(rays, hits, occlusion, nullptr);
+  tracer->Trace(rays, times ? *times : Tracer::NoTimes(), hits, occlusion, nullptr);
   REQUIRE(hits.size() == rays.size());
-  ref::CheckResult r = ref::CheckHits(CachedReference(scene), rays, hits, occlusion);
+  ref::CheckResult r = ref::CheckHits(CachedReference(scene), rays, hits, occlusion, times ? *times : Tracer::NoTimes());
   if (hitsOut) *hitsOut = std::move(hits);
   return r;
 }

@@ -288,7 +288,7 @@ struct Builder {
     box.hi = glm::vec3(r.hi[0], r.hi[1], r.hi[2]);
     const std::uint32_t g = r.Id();
     Bounds l, h;
-    scene->Visit(ranges, g, [&](const auto& piece, std::uint32_t) { SplitBounds(piece, box, axis, pos, l, h); });
+    PrimSplitBounds(*scene, ranges, g, box, axis, pos, l, h);
     const float id = __builtin_bit_cast(float, g);
     left = PrimRef{F4{l.lo.x, l.lo.y, l.lo.z, id}, F4{l.hi.x, l.hi.y, l.hi.z, 0.0f}};
     right = PrimRef{F4{h.lo.x, h.lo.y, h.lo.z, id}, F4{h.hi.x, h.hi.y, h.hi.z, 0.0f}};

@@ -161,10 +161,32 @@ const char* PrimTypeName(std::uint32_t k);
 // Ranges()); the caller has already checked that the box meets g's bounding
 // box. Builders make the test conservative by passing a slightly enlarged
 // box (grid_builder.cpp).
+// A moving piece (Scene::MotionOfUnified) meets the box at some time of the
+// shutter when its rest shape meets the box moved back by tau * motion for
+// some tau in [0, 1]; the test takes the box around all those boxes, which
+// holds them (conservative).
 inline bool PrimOverlapsBox(const Scene& scene, const PrimRanges& r, std::uint32_t g, const glm::dvec3& lo,
                             const glm::dvec3& hi)
 {
-  return scene.Visit(r, g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, lo, hi); });
+  glm::dvec3 l = lo, h = hi;
+  if (scene.hasMotion) {
+    const glm::dvec3 m(scene.MotionOfUnified(g));
+    l = glm::min(lo, lo - m);
+    h = glm::max(hi, hi - m);
+  }
+  return scene.Visit(r, g, [&](const auto& piece, std::uint32_t) { return OverlapsBox(piece, l, h); });
+}
+
+// SplitBounds of unified piece g (the BVH's spatial splits); a moving
+// piece's sides are those of its swept box within `box` (SplitBox).
+inline void PrimSplitBounds(const Scene& scene, const PrimRanges& r, std::uint32_t g, const Bounds& box, int axis,
+                            float pos, Bounds& left, Bounds& right)
+{
+  if (scene.hasMotion && scene.MotionOfUnified(g) != glm::vec3(0.0f)) {
+    SplitBox(Intersect(box, scene.UnifiedBounds(g)), axis, pos, left, right);
+    return;
+  }
+  scene.Visit(r, g, [&](const auto& piece, std::uint32_t) { SplitBounds(piece, box, axis, pos, left, right); });
 }
 
 // v rounded to float towards -inf / +inf (the types' outward bounds).

@@ -32,6 +32,21 @@ struct RenderContext {
   glm::dvec2 Stratified(std::uint64_t point, int k, std::uint64_t stream) const;
   // The camera ray of sample k at point `point` (pixel jitter, lens).
   RayRecord CameraRay(std::uint64_t point, int k) const;
+  // The time in the shutter interval [0, 1) of sample k at point `point`
+  // (motion blur), stratified over the pixel's samples; every ray of the
+  // sample's path has it. 0 for a static scene.
+  float Time(std::uint64_t point, int k) const;
+  // The times of a queue's rays (elements with a chunk-relative `point`) of
+  // sample k in the chunk that starts at `begin`; left empty for a static
+  // scene (Tracer::Trace: every ray at time 0).
+  template <class Q>
+  void Times(const std::vector<Q>& queue, std::uint64_t begin, int k, std::vector<float>& times) const
+  {
+    times.clear();
+    if (!scene.hasMotion) return;
+    times.resize(queue.size());
+    for (std::size_t i = 0; i < queue.size(); ++i) times[i] = Time(begin + queue[i].point, k);
+  }
 };
 
 // A ray of one pass's chunk [begin, end) of points: each integrator traces
@@ -76,23 +91,28 @@ inline double MsSince(std::chrono::steady_clock::time_point a)
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count();
 }
 
-// Traces the rays of a queue (elements with a `ray`) as one closest-hit batch.
+// Traces the rays of a queue (elements with a `ray` and a `point`) of
+// sample k in the chunk that starts at `begin` as one closest-hit batch, at
+// their samples' times.
 template <class Q>
-void TraceQueue(Tracer& tracer, const std::vector<Q>& queue, std::vector<RayRecord>& batch,
-                std::vector<HitRecord>& hits, RenderStats& st, std::uint64_t& raysCast)
+void TraceQueue(const RenderContext& ctx, std::uint64_t begin, int k, Tracer& tracer, const std::vector<Q>& queue,
+                std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st, std::uint64_t& raysCast)
 {
   batch.resize(queue.size());
   for (std::size_t i = 0; i < queue.size(); ++i) batch[i] = queue[i].ray;
+  std::vector<float> times;
+  ctx.Times(queue, begin, k, times);
   const auto t0 = std::chrono::steady_clock::now();
-  tracer.Trace(batch, hits, false, nullptr);
+  tracer.Trace(batch, times, hits, false, nullptr);
   st.traceMs += MsSince(t0);
   raysCast += queue.size();
 }
 
-// Compacts the valid shadow rays, traces them as one any-hit batch, and adds
-// the light of the unblocked ones to out[point] (counting blocked ones, and
-// those blocked by their own opaque primitive).
-void TraceShadows(const Scene& scene, Tracer& tracer, std::vector<ShadowRay>& shadows, glm::vec3* out,
+// Compacts the valid shadow rays, traces them as one any-hit batch (at
+// their samples' times: sample k of the chunk that starts at `begin`), and
+// adds the light of the unblocked ones to out[point] (counting blocked ones,
+// and those blocked by their own opaque primitive).
+void TraceShadows(const RenderContext& ctx, std::uint64_t begin, int k, Tracer& tracer, std::vector<ShadowRay>& shadows, glm::vec3* out,
                   std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st,
                   std::uint64_t& raysCast);
 

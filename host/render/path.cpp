@@ -66,7 +66,7 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
 
   while (!queue.empty()) {
     const std::size_t n = queue.size();
-    TraceQueue(tracer, queue, batch, hits, st, raysCast);
+    TraceQueue(ctx, begin, k, tracer, queue, batch, hits, st, raysCast);
     const auto tb = std::chrono::steady_clock::now();
     shadows.assign(n, ShadowRay{});
     cont.resize(n);
@@ -90,7 +90,7 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
       const Material& m = scene.materials[scene.prims[id].material];
       const glm::dvec3 o(ps.ray.org[0], ps.ray.org[1], ps.ray.org[2]);
       const glm::dvec3 dd(ps.ray.dir[0], ps.ray.dir[1], ps.ray.dir[2]);
-      const SurfacePoint sp = SurfaceAt(scene, g, o + double(hit.t) * dd, hit.u, hit.v);
+      const SurfacePoint sp = SurfaceAt(scene, g, o + double(hit.t) * dd, hit.u, hit.v, ctx.Time(begin + ps.point, k));
       const glm::dvec3 p(sp.p);
       const glm::dvec3 wo = -glm::normalize(dd);
 
@@ -193,7 +193,7 @@ void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, st
         st.pathRays++, st.pathHits += hit;
     }
     st.shadeMs += MsSince(tb);
-    TraceShadows(scene, tracer, shadows, out, batch, hits, st, raysCast);
+    TraceShadows(ctx, begin, k, tracer, shadows, out, batch, hits, st, raysCast);
     next.clear();
     for (std::size_t i = 0; i < n; ++i)
       if (alive[i]) next.push_back(cont[i]);

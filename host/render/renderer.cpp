@@ -101,6 +101,16 @@ RayRecord RenderContext::CameraRay(std::uint64_t point, int k) const
   return LensRay(frame, px, py, lens.x, lens.y);
 }
 
+float RenderContext::Time(std::uint64_t point, int k) const
+{
+  if (!scene.hasMotion) return 0.0f;
+  const std::uint64_t s = Sample(point, k);
+  const std::uint32_t order = std::uint32_t(HashRandom(opt.seed, 45, point));
+  const std::uint32_t stratum = Permute(std::uint32_t(k), std::uint32_t(opt.spp), order);
+  // Below 1 in float: the shutter interval is half-open.
+  return std::min(0.99999994f, float((stratum + Random(s, 44)) / double(opt.spp)));
+}
+
 RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
                            const LightSample& s)
 {
@@ -122,9 +132,11 @@ RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& si
   return MakeRay(o, end - o, 1.0f);
 }
 
-void TraceShadows(const Scene& scene, Tracer& tracer, std::vector<ShadowRay>& shadows, glm::vec3* out,
-                  std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st, std::uint64_t& raysCast)
+void TraceShadows(const RenderContext& ctx, std::uint64_t begin, int k, Tracer& tracer, std::vector<ShadowRay>& shadows,
+                  glm::vec3* out, std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st,
+                  std::uint64_t& raysCast)
 {
+  const Scene& scene = ctx.scene;
   std::size_t ns = 0;
   for (std::size_t i = 0; i < shadows.size(); ++i)
     if (shadows[i].valid) shadows[ns++] = shadows[i];
@@ -133,7 +145,9 @@ void TraceShadows(const Scene& scene, Tracer& tracer, std::vector<ShadowRay>& sh
   const auto t0 = std::chrono::steady_clock::now();
   batch.resize(ns);
   for (std::size_t i = 0; i < ns; ++i) batch[i] = shadows[i].ray;
-  tracer.Trace(batch, hits, true, nullptr);
+  std::vector<float> times;
+  ctx.Times(shadows, begin, k, times);
+  tracer.Trace(batch, times, hits, true, nullptr);
   st.shadowRays += ns;
   raysCast += ns;
   for (std::size_t i = 0; i < ns; ++i) {

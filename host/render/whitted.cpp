@@ -61,7 +61,7 @@ class Shader {
     const Material& m = scene_.materials[info.material];
     const glm::dvec3 o(pr.ray.org[0], pr.ray.org[1], pr.ray.org[2]);
     const glm::dvec3 dd(pr.ray.dir[0], pr.ray.dir[1], pr.ray.dir[2]);
-    const SurfacePoint sp = SurfaceAt(scene_, g, o + double(hit.t) * dd, hit.u, hit.v);
+    const SurfacePoint sp = SurfaceAt(scene_, g, o + double(hit.t) * dd, hit.u, hit.v, ctx_.Time(begin_ + pr.point, k_));
     const glm::vec3 p = sp.p;
     const float offset = opt_.robustOffsets ? sp.robustError : sp.error;
     const glm::vec3 d = glm::normalize(glm::vec3(dd));
@@ -271,7 +271,7 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
     const std::size_t n = queue.size();
     // Only the eye rays (the first queue) gather: room for their rays.
     const std::size_t maxSpawn = queue[0].type == RayType::Eye ? gather : 2;
-    TraceQueue(tracer, queue, batch, hits, st, raysCast);
+    TraceQueue(ctx, begin, k, tracer, queue, batch, hits, st, raysCast);
     const auto tb = std::chrono::steady_clock::now();
     shadows.resize(n * nl);
     spawned.resize(n * maxSpawn);
@@ -295,7 +295,7 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
     }
     st.shadeMs += MsSince(tb);
     // Shadow rays of this bounce, traced as one any-hit batch.
-    TraceShadows(scene, tracer, shadows, out, batch, hits, st, raysCast);
+    TraceShadows(ctx, begin, k, tracer, shadows, out, batch, hits, st, raysCast);
     next.clear();
     for (std::size_t i = 0; i < n; ++i)
       for (int j = 0; j < nSpawned[i]; ++j) next.push_back(spawned[i * maxSpawn + j]);
