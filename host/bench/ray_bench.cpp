@@ -40,16 +40,16 @@ ErrorSummary Summarise(const ref::CheckResult& c)
 
 }  // namespace
 
-Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlusion, int repeat,
-                 std::vector<HitRecord>& hits)
+Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, const std::vector<float>& times, bool occlusion,
+                 int repeat, std::vector<HitRecord>& hits)
 {
   tracer.Prepare(occlusion);
-  tracer.Trace(rays, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
+  tracer.Trace(rays, times, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
   std::vector<double> ms, kernelMs;
   std::vector<HitRecord> scratch;
   for (int r = 0; r < repeat; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
-    tracer.Trace(rays, scratch, occlusion, nullptr);
+    tracer.Trace(rays, times, scratch, occlusion, nullptr);
     ms.push_back(MsSince(t0));
     if (tracer.LastKernelMs() >= 0.0) kernelMs.push_back(tracer.LastKernelMs());
   }
@@ -162,7 +162,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         } else {
           try {
             std::vector<HitRecord> hits;
-            row.timing = TimeTrace(*tracer, set.rays, occlusion, o.repeat, hits);
+            row.timing = TimeTrace(*tracer, set.rays, set.times, occlusion, o.repeat, hits);
             row.variantRan = tracer->VariantName();
             for (const auto& h : hits) row.hits += h.prim != CR_NO_HIT;
             if (wantStats) {
@@ -174,7 +174,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
               TraceStatsSum sum;
               std::vector<HitRecord> statsHits;
               statsTracer->Prepare(occlusion);
-              statsTracer->Trace(set.rays, statsHits, occlusion, &sum);
+              statsTracer->Trace(set.rays, set.times, statsHits, occlusion, &sum);
               const double n = double(set.rays.size());
               row.perRay = PerRay{double(sum.nIT) / n, double(sum.nTS) / n, double(sum.nLeaves) / n,
                                   double(sum.nEmptyLeaves) / n};
@@ -182,7 +182,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
             const auto key = std::make_pair(ki, HashHits(hits));
             auto it = checked.find(key);
             if (it == checked.end())
-              it = checked.emplace(key, Summarise(ref::CheckHits(*reference, set.rays, hits, occlusion))).first;
+              it = checked.emplace(key, Summarise(ref::CheckHits(*reference, set.rays, hits, occlusion, set.times))).first;
             row.error = it->second;
           } catch (const InputError& e) {
             row.note = fmt::format("skipped: {}", e.what());

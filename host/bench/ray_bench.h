@@ -24,7 +24,8 @@ std::vector<Row> RunRayBench(const BenchOptions& options, const std::vector<Scen
                              const std::vector<Combo>& combos, const RowCallback& onRow);
 
 // Traces `rays` once untimed (hits out), then `repeat` timed times.
-Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlusion, int repeat,
-                 std::vector<HitRecord>& hits);
+// times: the rays' times (motion blur), or empty.
+Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, const std::vector<float>& times, bool occlusion,
+                 int repeat, std::vector<HitRecord>& hits);
 
 }  // namespace cr::bench

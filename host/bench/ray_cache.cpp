@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // Bumped when GenerateRays or this cache's naming changes meaning.
-constexpr int kRayCacheVersion = 1;
+constexpr int kRayCacheVersion = 2;  // 2: scenes with motion give rays with times
 
 nlohmann::json Identity(const SceneRef& ref, const RaySetSpec& spec, int width, int height)
 {
@@ -61,7 +61,7 @@ RaySet GetRaySet(const std::string& dir, const SceneRef& ref, const Scene& scene
       std::ifstream f(sidecar);
       nlohmann::json old = nlohmann::json::parse(f);
       if (old == id) {
-        set.rays = ReadRays(set.path);
+        set.rays = ReadRays(set.path, &set.times);
         set.fromCache = true;
         return set;
       }
@@ -77,8 +77,8 @@ RaySet GetRaySet(const std::string& dir, const SceneRef& ref, const Scene& scene
   g.height = set.height;
   g.seed = spec.seed;
   g.count = spec.kind == RayKind::Primary ? 0 : spec.count;
-  set.rays = GenerateRays(scene, tracer, g);
-  WriteRays(set.path, set.rays);
+  set.rays = GenerateRays(scene, tracer, g, &set.times);
+  WriteRays(set.path, set.rays, set.times);
   const std::string text = id.dump(2) + "\n";
   WriteFileAtomically(sidecar, text.data(), text.size());
   return set;

@@ -24,6 +24,7 @@ struct RaySetSpec {
 
 struct RaySet {
   std::vector<RayRecord> rays;
+  std::vector<float> times;  // a scene with motion: one per ray (CRRAYS02), else empty
   std::string path;    // the cached .rays file
   int width = 0, height = 0;  // image of the primary pass
   bool fromCache = false;
