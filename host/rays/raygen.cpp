@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 
 #include "host/core/error.h"
-#include "host/render/integrator.h"
 #include "host/scene/camera.h"
 #include "host/scene/surface.h"
 
@@ -49,18 +48,6 @@ std::uint64_t HashRandom(std::uint64_t seed, std::uint64_t stream, std::uint64_t
 namespace {
 
 glm::vec3 ToF(const glm::dvec3& v) { return glm::vec3(v); }
-
-RayRecord Make(const glm::vec3& o, const glm::vec3& d, float tmin, float tmax)
-{
-  RayRecord r;
-  for (int a = 0; a < 3; ++a) {
-    r.org[a] = o[a];
-    r.dir[a] = d[a];
-  }
-  r.tmin = tmin;
-  r.tmax = tmax;
-  return r;
-}
 
 // A cosine-weighted direction about ng (Malley's method).
 glm::dvec3 CosineAbout(const glm::dvec3& ng, std::uint64_t seed, std::uint64_t stream, std::uint64_t sample)
@@ -106,7 +93,7 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
       glm::vec3 o = OffsetRayOrigin(sp.p, sp.error, ToF(side));
       glm::vec3 d = l.position - o;
       if (d == glm::vec3(0.0f)) continue;
-      out.push_back(Make(o, d, 0.0f, 1.0f));
+      out.push_back(MakeRay(o, d, 1.0f));
     }
   } else if (kind == RayKind::Soft) {
     for (std::size_t l = 0; l < soft.size(); ++l) {
@@ -120,7 +107,7 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
   } else {
     glm::vec3 df = ToF(CosineAbout(ng, seed, 11, sample));
     if (df == glm::vec3(0.0f)) return;
-    RayRecord dr = Make(OffsetRayOrigin(sp.p, sp.error, ToF(ng)), df, 0.0f, INFINITY);
+    RayRecord dr = MakeRay(OffsetRayOrigin(sp.p, sp.error, ToF(ng)), df, INFINITY);
     if (kind == RayKind::Path) {
       // Follow it to its hit and bounce once more.
       ref::DRay r2 = ref::MakeRay(dr);
@@ -132,7 +119,7 @@ void Secondary(const Scene& scene, const ref::ReferenceTracer& tr, RayKind kind,
       if (glm::dot(n2, r2.d) > 0.0) n2 = -n2;
       df = ToF(CosineAbout(n2, seed, 14, sample));
       if (df == glm::vec3(0.0f)) return;
-      dr = Make(OffsetRayOrigin(s2.p, s2.error, ToF(n2)), df, 0.0f, INFINITY);
+      dr = MakeRay(OffsetRayOrigin(s2.p, s2.error, ToF(n2)), df, INFINITY);
     }
     out.push_back(dr);
   }
@@ -183,7 +170,7 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
       double s = std::sqrt(std::max(0.0, 1.0 - z * z));
       glm::vec3 d(static_cast<float>(s * std::cos(phi)), static_cast<float>(s * std::sin(phi)), static_cast<float>(z));
       if (d == glm::vec3(0.0f)) d = glm::vec3(0.0f, 0.0f, 1.0f);
-      rays[i] = Make(o, d, 0.0f, INFINITY);
+      rays[i] = MakeRay(o, d, INFINITY);
     });
     if (timed)
       for (std::size_t i = 0; i < rays.size(); ++i) times->push_back(timeOf(i));

@@ -11,6 +11,7 @@
 
 #include "host/render/renderer.h"
 #include "host/scene/camera.h"
+#include "host/scene/surface.h"
 
 namespace cr {
 
@@ -56,25 +57,6 @@ void WhittedChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin,
                   glm::vec3* out, RenderStats& st, std::uint64_t& rays);
 void PathChunk(const RenderContext& ctx, Tracer& tracer, std::uint64_t begin, std::uint64_t end, int k, glm::vec3* out,
                RenderStats& st, std::uint64_t& rays);
-
-// A shadow ray from p (offset by `offset` to the side of unit `side`) to the
-// point s sampled on light l, that point moved off the light towards p by
-// the float error of l's surface, so that the ray ends before the light.
-RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
-                           const LightSample& s);
-
-// A ray from o along d with [0, tmax].
-inline RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
-{
-  RayRecord r;
-  for (int a = 0; a < 3; ++a) {
-    r.org[a] = o[a];
-    r.dir[a] = d[a];
-  }
-  r.tmin = 0.0f;
-  r.tmax = tmax;
-  return r;
-}
 
 // A shadow ray and the light it delivers to out[point] if unblocked.
 struct ShadowRay {

@@ -111,27 +111,6 @@ float RenderContext::Time(std::uint64_t point, int k) const
   return std::min(0.99999994f, float((stratum + Random(s, 44)) / double(opt.spp)));
 }
 
-RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
-                           const LightSample& s)
-{
-  const glm::vec3 o = OffsetRayOrigin(p, offset, side);
-  // The light's float surface lies within SurfacePoint::error of s.p.
-  double scale;
-  if (l.kind == AreaLightKind::kSphere) {
-    scale = std::max({std::fabs(l.c.x), std::fabs(l.c.y), std::fabs(l.c.z)}) + l.radius;
-  } else {
-    scale = 0.0;
-    for (const glm::dvec3& q : {l.c, l.c + l.u, l.c + l.v, l.c + l.u + l.v})
-      scale = std::max({scale, std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
-  }
-  const glm::vec3 q(s.p);
-  const double qn = std::max({std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
-  const float err = float(0x1p-19 * scale + 0x1p-22 * qn) * 2.0f;
-  const glm::vec3 toward = glm::dot(glm::dvec3(o) - s.p, s.n) >= 0.0 ? glm::vec3(s.n) : -glm::vec3(s.n);
-  const glm::vec3 end = OffsetRayOrigin(q, err, toward);
-  return MakeRay(o, end - o, 1.0f);
-}
-
 void TraceShadows(const RenderContext& ctx, std::uint64_t begin, int k, Tracer& tracer, std::vector<ShadowRay>& shadows,
                   glm::vec3* out, std::vector<RayRecord>& batch, std::vector<HitRecord>& hits, RenderStats& st,
                   std::uint64_t& raysCast)
@@ -189,13 +168,11 @@ Image Render(const Scene& scene, Tracer& tracer, const RenderOptions& optIn, Ren
   ctx.twoSidedOpaque =
       opt.sides == Sides::Two || (opt.sides == Sides::Auto && scene.CountKind(PrimKind::kPatch, CR_PRIM_TRIANGLE) > 0);
   {
-    const double nl = double(std::max<std::size_t>(1, scene.lights.size()));
-    ctx.intensity = float(std::sqrt(nl) / (2.0 * nl));
+    ctx.intensity = float(SpdLightIntensity(scene.lights.size()));
     // A point light in the path tracer: the radiant intensity that gives a
     // diffuse surface at the centre of the scene what the SPD shading gives
     // it (the limit of render --area-lights, host/scene/area_light.h).
-    const Bounds b = scene.WorldBounds();
-    const glm::dvec3 mid = b.Empty() ? glm::dvec3(scene.camera.at) : 0.5 * (glm::dvec3(b.lo) + glm::dvec3(b.hi));
+    const glm::dvec3 mid = LightMatchPoint(scene);
     double d2 = 0.0;
     for (const Light& l : scene.lights) d2 += glm::dot(glm::dvec3(l.position) - mid, glm::dvec3(l.position) - mid);
     if (!scene.lights.empty()) d2 /= double(scene.lights.size());

@@ -75,6 +75,7 @@ AreaLight SphereLight(const glm::dvec3& c, double radius, const glm::vec3& radia
   l.c = glm::dvec3(glm::vec3(c));  // the traced sphere's float centre and radius
   l.radius = double(float(radius));
   l.area = 4.0 * kPi * l.radius * l.radius;
+  l.scale = std::max({std::fabs(l.c.x), std::fabs(l.c.y), std::fabs(l.c.z)}) + l.radius;
   l.radiance = radiance;
   return l;
 }
@@ -150,6 +151,8 @@ bool ParseAreaLight(NffStatement& st, Scene& scene)
     if (!(l.area > 0.0) || !std::isfinite(l.area))
       st.Fail("'la': edges u and v are zero or parallel: the light has no area");
     l.n = uv / l.area;
+    for (const glm::dvec3& q : {l.c, l.c + l.u, l.c + l.v, l.c + l.u + l.v})
+      l.scale = std::max({l.scale, std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
     l.prim = scene.NumPrims();
     const std::uint32_t m = AddLightMaterial(scene, l.radiance, scene.areaLights.size());
     if (!AddPolygon(scene, PrimKind::kPolygon, {l.c, l.c + l.u, l.c + l.u + l.v, l.c + l.v}, nullptr, m,
@@ -169,14 +172,24 @@ bool ParseAreaLight(NffStatement& st, Scene& scene)
   return false;
 }
 
+double SpdLightIntensity(std::size_t nLights)
+{
+  const double nl = double(std::max<std::size_t>(1, nLights));
+  return std::sqrt(nl) / (2.0 * nl);
+}
+
+glm::dvec3 LightMatchPoint(const Scene& scene)
+{
+  const Bounds b = scene.WorldBounds();
+  return b.Empty() ? glm::dvec3(scene.camera.at) : 0.5 * (glm::dvec3(b.lo) + glm::dvec3(b.hi));
+}
+
 void PointLightsToSpheres(Scene& scene, double radius)
 {
   if (!(radius > 0.0)) throw InputError(fmt::format("--area-lights {}: the radius must be > 0", radius));
   if (scene.lights.empty()) return;
-  const Bounds b = scene.WorldBounds();
-  const glm::dvec3 mid = b.Empty() ? glm::dvec3(scene.camera.at) : 0.5 * (glm::dvec3(b.lo) + glm::dvec3(b.hi));
-  const double nl = double(scene.lights.size());
-  const double intensity = std::sqrt(nl) / (2.0 * nl);  // the SPD's per-light intensity
+  const glm::dvec3 mid = LightMatchPoint(scene);
+  const double intensity = SpdLightIntensity(scene.lights.size());
   for (const Light& pl : scene.lights) {
     // Irradiance of a sphere light of radiance L at distance d: L pi r^2 / d^2;
     // a diffuse surface reflects Kd c L r^2 / d^2, the SPD shading Kd c I.

@@ -32,6 +32,9 @@ struct AreaLight {
   glm::dvec3 n{0.0};  // unit u x v: the emitting side (parallelogram)
   double radius = 0.0;  // sphere
   double area = 0.0;
+  // Largest coordinate magnitude of its defining points (a sphere's centre
+  // plus its radius): the scale of a float intersector's error on it.
+  double scale = 0.0;
   glm::vec3 radiance{0.0f};
   std::uint32_t prim = 0;  // its primitive id
 };
@@ -63,6 +66,13 @@ AreaLight SphereLight(const glm::dvec3& centre, double radius, const glm::vec3& 
 // primitive and its material. InputError (file:line) for a flat
 // parallelogram, a radius <= 0 or a negative radiance.
 bool ParseAreaLight(NffStatement& st, Scene& scene);
+
+// The SPD's intensity of each of n point lights, sqrt(n) / (2 n) (n at
+// least 1; ../shared/SPD.md), and the point at which a light is matched to
+// that shading when it becomes an area light or a path tracer's point
+// source: the centre of the scene's bounds (the camera's `at` when empty).
+double SpdLightIntensity(std::size_t nLights);
+glm::dvec3 LightMatchPoint(const Scene& scene);
 
 // render --area-lights R: every point light becomes a sphere light of radius
 // R (appended to the scene, ids after the file's), with the radiance that

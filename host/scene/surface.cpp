@@ -51,4 +51,17 @@ glm::vec3 OffsetRayOrigin(const glm::vec3& p, float error, const glm::vec3& n)
   return o;
 }
 
+RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
+                           const LightSample& s)
+{
+  const glm::vec3 o = OffsetRayOrigin(p, offset, side);
+  // The light's float surface lies within SurfacePoint::error of s.p.
+  const glm::vec3 q(s.p);
+  const double qn = std::max({std::fabs(q.x), std::fabs(q.y), std::fabs(q.z)});
+  const float err = float(0x1p-19 * l.scale + 0x1p-22 * qn) * 2.0f;
+  const glm::vec3 toward = glm::dot(glm::dvec3(o) - s.p, s.n) >= 0.0 ? glm::vec3(s.n) : -glm::vec3(s.n);
+  const glm::vec3 end = OffsetRayOrigin(q, err, toward);
+  return MakeRay(o, end - o, 1.0f);
+}
+
 }  // namespace cr

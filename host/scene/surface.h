@@ -53,4 +53,24 @@ SurfacePoint SurfaceAt(const Scene& scene, std::uint32_t g, const glm::dvec3& pA
 // from the surface so the move survives rounding.
 glm::vec3 OffsetRayOrigin(const glm::vec3& p, float error, const glm::vec3& n);
 
+// A ray record from o along d over [0, tmax] (the rays the renderer and the
+// ray generator spawn).
+inline RayRecord MakeRay(const glm::vec3& o, const glm::vec3& d, float tmax)
+{
+  RayRecord r;
+  for (int a = 0; a < 3; ++a) {
+    r.org[a] = o[a];
+    r.dir[a] = d[a];
+  }
+  r.tmin = 0.0f;
+  r.tmax = tmax;
+  return r;
+}
+
+// A shadow ray from p (offset by `offset` to the side of unit `side`) to the
+// point s sampled on light l, that point moved off the light towards p by
+// the float error of l's surface, so that the ray ends before the light.
+RayRecord ShadowRayToLight(const glm::vec3& p, float offset, const glm::vec3& side, const AreaLight& l,
+                           const LightSample& s);
+
 }  // namespace cr
