@@ -11,6 +11,7 @@ pkgs=(
   nlohmann-json3-dev libfmt-dev doctest-dev libbenchmark-dev libtinyobjloader-dev
   libembree-dev python3-matplotlib oclgrind
   clang libclang-rt-14-dev llvm clang-15 libclc-15
+  libopenmpi-dev openmpi-bin
 )
 
 missing=()

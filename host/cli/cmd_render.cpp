@@ -1,4 +1,7 @@
 // render: a scene to PNG or EXR by the Whitted or the path-tracing integrator.
+#include <chrono>
+#include <cstring>
+#include <type_traits>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -10,11 +13,108 @@
 #include "host/cli/commands.h"
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/mpi/mpi.h"
 #include "host/render/image_io.h"
 #include "host/render/renderer.h"
 #include "host/scene/area_light.h"
 
 namespace cr::cli {
+
+namespace {
+
+// What a distributed render reports beside the image (rank 0 prints it).
+struct DistInfo {
+  std::string mode;
+  int ranks = 1;
+  int tileRows = 0;
+  std::vector<double> busyMs, wallMs;  // per rank
+  std::vector<std::uint64_t> bands;    // bands (tiles) rendered per rank
+  std::uint64_t bytes = 0, messages = 0;
+  double assembleMs = 0.0;
+};
+
+// Renders this rank's part of the image (tiles handed out by a shared
+// counter, or the rank's static band), and assembles the frame on rank 0:
+// each rank sends its rows, rank 0 copies them into place. Other ranks get
+// an empty image. Stats are summed over ranks on rank 0.
+Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, const std::string& mode, int tileRows,
+                        RenderStats& stats, DistInfo& info)
+{
+  const int h = ro.height > 0 ? ro.height : scene.camera.height;
+  const int ranks = mpi::Size(), rank = mpi::Rank();
+  info.mode = mode;
+  info.ranks = ranks;
+  info.tileRows = mode == "tiles" ? tileRows : 0;
+  std::vector<std::pair<int, int>> mine;
+  const std::int64_t nTiles = (h + tileRows - 1) / tileRows;
+  mpi::WorkCounter counter(mode == "tiles" ? nTiles : 0);
+  bool bandGiven = false;
+  ro.nextRows = [&](int& y0, int& y1) {
+    if (mode == "tiles") {
+      const std::int64_t t = counter.Next();
+      if (t < 0) return false;
+      y0 = int(t) * tileRows;
+      y1 = std::min(h, y0 + tileRows);
+    } else {
+      // The hypercube paper's bands: rank r holds rows [r h / N, (r + 1) h / N).
+      if (bandGiven) return false;
+      bandGiven = true;
+      y0 = int(std::int64_t(h) * rank / ranks);
+      y1 = int(std::int64_t(h) * (rank + 1) / ranks);
+      if (y0 == y1) return false;
+    }
+    mine.emplace_back(y0, y1);
+    return true;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  Image part = Render(scene, tracer, ro, &stats);
+  const double busy = stats.totalMs;
+  // This rank's rows: (y0, y1) then the floats of rows [y0, y1), per band.
+  std::vector<char> packed;
+  const std::size_t rowFloats = std::size_t(part.width) * 3;
+  for (const auto& [y0, y1] : mine) {
+    const std::int32_t hdr[2] = {y0, y1};
+    const char* hb = reinterpret_cast<const char*>(hdr);
+    packed.insert(packed.end(), hb, hb + sizeof hdr);
+    const char* fb = reinterpret_cast<const char*>(part.rgb.data() + std::size_t(y0) * rowFloats);
+    packed.insert(packed.end(), fb, fb + std::size_t(y1 - y0) * rowFloats * sizeof(float));
+  }
+  static_assert(std::is_trivially_copyable_v<RenderStats>);
+  std::vector<char> statsBytes(sizeof(RenderStats));
+  std::memcpy(statsBytes.data(), &stats, sizeof(RenderStats));
+  const auto ta = std::chrono::steady_clock::now();
+  const std::vector<char> all = mpi::GatherBytes(packed);
+  const std::vector<char> allStats = mpi::GatherBytes(statsBytes);
+  info.busyMs = mpi::GatherDouble(busy);
+  info.wallMs = mpi::GatherDouble(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  std::vector<double> nb = mpi::GatherDouble(double(mine.size()));
+  info.bytes = mpi::SumAll(mpi::BytesSent());
+  info.messages = mpi::SumAll(mpi::MessagesSent());
+  if (rank != 0) return Image{};
+  for (double b : nb) info.bands.push_back(std::uint64_t(b));
+  Image img;
+  img.width = part.width;
+  img.height = part.height;
+  img.rgb.assign(part.rgb.size(), 0.0f);
+  for (std::size_t at = 0; at < all.size();) {
+    std::int32_t hdr[2];
+    std::memcpy(hdr, all.data() + at, sizeof hdr);
+    at += sizeof hdr;
+    const std::size_t n = std::size_t(hdr[1] - hdr[0]) * rowFloats;
+    std::memcpy(img.rgb.data() + std::size_t(hdr[0]) * rowFloats, all.data() + at, n * sizeof(float));
+    at += n * sizeof(float);
+  }
+  // The ranks' counters summed (times: the slowest rank's).
+  for (std::size_t at = sizeof(RenderStats); at + sizeof(RenderStats) <= allStats.size(); at += sizeof(RenderStats)) {
+    RenderStats r;
+    std::memcpy(&r, allStats.data() + at, sizeof(RenderStats));
+    AddRenderStats(stats, r);
+  }
+  info.assembleMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ta).count();
+  return img;
+}
+
+}  // namespace
 
 Run RegisterRender(CLI::App& app)
 {
@@ -24,6 +124,8 @@ Run RegisterRender(CLI::App& app)
     double areaLights = 0.0, timeLimit = 0.0;
     bool spd = false, fresnel = false, noProgress = false;
     std::uint64_t seed = 1;
+    std::string distribute = "tiles";
+    int tileRows = 4;
     TracerOptions t;
   };
   auto o = std::make_shared<O>();
@@ -54,8 +156,22 @@ Run RegisterRender(CLI::App& app)
   cmd->add_option("--seed", o->seed, "Seed of the jitter")->capture_default_str();
   cmd->add_option("--stats", o->statsPath, "Write ray statistics (JSON) to this file");
   cmd->add_flag("--no-progress", o->noProgress, "No progress bar on stderr");
+  cmd->add_option("--distribute", o->distribute,
+                  "Under mpirun: tiles (dynamic tiles of --tile-rows rows, scene on every rank) or bands (the "
+                  "hypercube paper's static bands, one per rank); docs/DISTRIBUTED.md")
+      ->capture_default_str();
+  cmd->add_option("--tile-rows", o->tileRows, "Rows per tile of --distribute tiles (1..4096)")->capture_default_str();
   AddTracerOptions(cmd, o->t);
   return [o]() {
+    if (o->distribute == "bands-data")
+      throw InputError("--distribute bands-data (the paper's data-parallel bands) is not implemented yet; use tiles "
+                       "or bands");
+    if (o->distribute != "tiles" && o->distribute != "bands")
+      throw InputError(fmt::format("--distribute '{}': expected tiles or bands", o->distribute));
+    if (o->tileRows < 1 || o->tileRows > 4096) throw InputError(fmt::format("--tile-rows {} is not in 1..4096", o->tileRows));
+    const bool distributed = mpi::Distributed();
+    if (distributed && (o->writeEvery > 0 || o->timeLimit > 0.0))
+      throw InputError("--write-every and --time-limit apply to a render by one process (not under mpirun)");
     TraceConfig cfg = o->t.ToConfig();
     cfg.unifiedHits = true;
     std::unique_ptr<tbb::global_control> limit;
@@ -75,7 +191,7 @@ Run RegisterRender(CLI::App& app)
     ro.spd = o->spd;
     ro.fresnel = o->fresnel;
     ro.seed = o->seed;
-    ro.progress = !o->noProgress;
+    ro.progress = !o->noProgress && !distributed;
     ro.robustOffsets = cfg.backend != Backend::Embree && cfg.precision != Precision::Fast;
     if (o->sides == "auto") ro.sides = Sides::Auto;
     else if (o->sides == "one") ro.sides = Sides::One;
@@ -91,7 +207,10 @@ Run RegisterRender(CLI::App& app)
     };
     auto tracer = CreateTracer(scene, cfg);
     RenderStats stats;
-    Image img = Render(scene, *tracer, ro, &stats);
+    DistInfo dist;
+    Image img = distributed ? RenderDistributed(scene, *tracer, ro, o->distribute, o->tileRows, stats, dist)
+                            : Render(scene, *tracer, ro, &stats);
+    if (mpi::Rank() != 0) return 0;  // rank 0 writes and reports
     WriteImage(o->out, img.width, img.height, img.rgb);
     nlohmann::json j{{"scene", o->scene},
                      {"output", o->out},
@@ -109,6 +228,19 @@ Run RegisterRender(CLI::App& app)
                      {"spd", ro.spd},
                      {"build_ms", tracer->Info().buildMs},
                      {"stats", stats}};
+    if (distributed) {
+      double wall = 0.0;
+      for (double w : dist.wallMs) wall = std::max(wall, w);
+      nlohmann::json ranks = nlohmann::json::array();
+      for (int r = 0; r < dist.ranks; ++r)
+        ranks.push_back({{"rank", r},
+                         {"busy_ms", dist.busyMs[std::size_t(r)]},
+                         {"idle_ms", wall - dist.busyMs[std::size_t(r)]},
+                         {"bands", dist.bands[std::size_t(r)]}});
+      j["mpi"] = {{"ranks", dist.ranks},         {"distribute", dist.mode},    {"tile_rows", dist.tileRows},
+                  {"wall_ms", wall},             {"assemble_ms", dist.assembleMs}, {"bytes_sent", dist.bytes},
+                  {"messages_sent", dist.messages}, {"per_rank", ranks}};
+    }
     if (!tracer->FallbackReason().empty()) {
       j["fallback_from"] = "opencl";
       j["fallback_reason"] = tracer->FallbackReason();

@@ -1,6 +1,7 @@
 // rays, trace and check.
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <iostream>
 #include <memory>
 
@@ -12,6 +13,7 @@
 #include "host/cli/commands.h"
 #include "host/prims/sdf_steps.h"
 #include "host/core/error.h"
+#include "host/mpi/mpi.h"
 #include "host/io/rays_io.h"
 #include "host/rays/raygen.h"
 #include "host/reference/check.h"
@@ -110,6 +112,19 @@ Run RegisterTrace(CLI::App& app)
       rays = ReadRays(o->rays, &rayTimes);
     else
       ParseSize(o->primary, width, height);
+    // Under mpirun: this rank traces its contiguous slice of the rays; rank
+    // 0 gathers the hits in input order.
+    const bool distributed = mpi::Distributed();
+    if (distributed && !o->primary.empty()) throw InputError("trace under mpirun: give --rays (not --primary)");
+    if (distributed && o->stats) throw InputError("trace under mpirun: --stats counts one process's rays; drop it");
+    const std::size_t nAll = rays.size();
+    if (distributed) {
+      const std::size_t b = nAll * std::size_t(mpi::Rank()) / std::size_t(mpi::Size());
+      const std::size_t e = nAll * std::size_t(mpi::Rank() + 1) / std::size_t(mpi::Size());
+      rays = std::vector<RayRecord>(rays.begin() + std::ptrdiff_t(b), rays.begin() + std::ptrdiff_t(e));
+      if (!rayTimes.empty())
+        rayTimes = std::vector<float>(rayTimes.begin() + std::ptrdiff_t(b), rayTimes.begin() + std::ptrdiff_t(e));
+    }
     const std::size_t nRays = o->primary.empty() ? rays.size() : std::size_t(width) * std::size_t(height);
     const CameraFrame frame = MakeCameraFrame(scene.camera, width, height);
     auto tracer = CreateTracer(scene, cfg);
@@ -128,7 +143,22 @@ Run RegisterTrace(CLI::App& app)
       if (tracer->LastKernelMs() >= 0.0) kernelTimes.push_back(tracer->LastKernelMs());
     }
     std::sort(times.begin(), times.end());
-    const double median = times[times.size() / 2];
+    double median = times[times.size() / 2];
+    nlohmann::json mpiInfo;
+    if (distributed) {
+      std::vector<char> mine(hits.size() * sizeof(HitRecord));
+      if (!hits.empty()) std::memcpy(mine.data(), hits.data(), mine.size());
+      const std::vector<char> all = mpi::GatherBytes(mine);
+      const std::vector<double> medians = mpi::GatherDouble(median);
+      const std::uint64_t bytes = mpi::SumAll(mpi::BytesSent()), messages = mpi::SumAll(mpi::MessagesSent());
+      if (mpi::Rank() != 0) return 0;  // rank 0 writes and reports
+      hits.resize(nAll);
+      if (nAll) std::memcpy(hits.data(), all.data(), nAll * sizeof(HitRecord));
+      median = *std::max_element(medians.begin(), medians.end());  // the slowest rank's
+      mpiInfo = {{"ranks", mpi::Size()}, {"trace_ms_per_rank", medians}, {"bytes_sent", bytes},
+                 {"messages_sent", messages}};
+    }
+    const std::size_t nReported = distributed ? nAll : nRays;
     if (!o->out.empty()) WriteHits(o->out, hits);
     nlohmann::json j;
     j["scene"] = o->scene;
@@ -140,16 +170,17 @@ Run RegisterTrace(CLI::App& app)
     j["device"] = tracer->DeviceName();
     j["threads"] = cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency();
     j["query"] = o->occlusion ? "occlusion" : "closest";
-    j["rays"] = nRays;
+    j["rays"] = nReported;
     j["build_ms"] = tracer->Info().buildMs;
     j["trace_ms"] = median;
     j["trace_ms_min"] = times.front();
     j["trace_ms_max"] = times.back();
     j["repeat"] = o->repeat;
-    j["mrays_per_s"] = median > 0.0 ? double(nRays) / (median * 1e3) : 0.0;
+    j["mrays_per_s"] = median > 0.0 ? double(nReported) / (median * 1e3) : 0.0;
+    if (distributed) j["mpi"] = mpiInfo;
     // The kernel's device time alone (OpenCL): the figure that compares
     // structures on a device whose transfers dominate the wall time.
-    if (kernelTimes.size() == times.size()) {
+    if (!distributed && kernelTimes.size() == times.size()) {
       std::sort(kernelTimes.begin(), kernelTimes.end());
       const double km = kernelTimes[kernelTimes.size() / 2];
       j["kernel_ms"] = km;

@@ -5,14 +5,41 @@
 #include <exception>
 #include <map>
 #include <new>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
 
 #include "host/cli/commands.h"
 #include "host/core/error.h"
+#include "host/mpi/mpi.h"
+
+namespace {
+
+// A failure: one line on stderr, exit code `code`. Across MPI ranks the job
+// ends there (mpi::Abort), naming the rank unless it is rank 0.
+int Fail(const std::string& what, int code)
+{
+  if (cr::mpi::Distributed()) cr::mpi::Abort(what, code);
+  std::fprintf(stderr, "cellray: %s\n", what.c_str());
+  return code;
+}
+
+int Main(int argc, char** argv);
+
+}  // namespace
 
 int main(int argc, char** argv)
+{
+  cr::mpi::Init(&argc, &argv);
+  const int rc = Main(argc, argv);
+  cr::mpi::Finalize();
+  return rc;
+}
+
+namespace {
+
+int Main(int argc, char** argv)
 {
   const std::string about =
       "cellray: ray tracing with " + cr::AccelKindNames() + " on CPU SIMD and OpenCL, checked against an fp64 reference";
@@ -50,9 +77,8 @@ int main(int argc, char** argv)
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "cellray: %s\n", e.what());
-    std::fprintf(stderr, "cellray: run 'cellray --help' or 'cellray <command> --help' for usage\n");
-    return cr::kExitBadInput;
+    return Fail(std::string(e.what()) + "\ncellray: run 'cellray --help' or 'cellray <command> --help' for usage",
+                cr::kExitBadInput);
   }
 
   try {
@@ -60,16 +86,14 @@ int main(int argc, char** argv)
       if (cmd->parsed()) return run();
     return cr::kExitBadInput;
   } catch (const cr::InputError& e) {
-    std::fprintf(stderr, "cellray: %s\n", e.what());
-    return cr::kExitBadInput;
+    return Fail(e.what(), cr::kExitBadInput);
   } catch (const cr::RuntimeError& e) {
-    std::fprintf(stderr, "cellray: %s\n", e.what());
-    return cr::kExitRuntime;
+    return Fail(e.what(), cr::kExitRuntime);
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "cellray: out of memory\n");
-    return cr::kExitRuntime;
+    return Fail("out of memory", cr::kExitRuntime);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "cellray: %s\n", e.what());
-    return cr::kExitRuntime;
+    return Fail(e.what(), cr::kExitRuntime);
   }
 }
+
+}  // namespace

@@ -42,6 +42,22 @@ void to_json(nlohmann::json& j, const RenderStats& s)
                      {"total_ms", s.totalMs}};
 }
 
+void AddRenderStats(RenderStats& s, const RenderStats& p)
+{
+  s.eyeRays += p.eyeRays, s.eyeHits += p.eyeHits;
+  s.reflectionRays += p.reflectionRays, s.reflectionHits += p.reflectionHits;
+  s.refractionRays += p.refractionRays, s.refractionHits += p.refractionHits;
+  s.shadowRays += p.shadowRays, s.shadowHits += p.shadowHits;
+  s.totalInternalReflections += p.totalInternalReflections;
+  s.selfShadowed += p.selfShadowed;
+  s.diffuseRays += p.diffuseRays, s.diffuseHits += p.diffuseHits;
+  s.pathRays += p.pathRays, s.pathHits += p.pathHits;
+  s.timeLimited = s.timeLimited || p.timeLimited;
+  s.traceMs = std::max(s.traceMs, p.traceMs);
+  s.shadeMs = std::max(s.shadeMs, p.shadeMs);
+  s.totalMs = std::max(s.totalMs, p.totalMs);
+}
+
 DiffuseGather ParseDiffuse(const std::string& s)
 {
   DiffuseGather g;
@@ -210,32 +226,54 @@ Image Render(const Scene& scene, Tracer& tracer, const RenderOptions& optIn, Ren
     return img;
   };
 
-  for (int k = 0; k < opt.spp; ++k) {
-    bool aborted = false;
-    for (std::uint64_t begin = 0; begin < nPoints; begin += kChunk) {
-      const std::uint64_t end = std::min(nPoints, begin + kChunk);
+  // Sample k of points [pb, pe) into pass[pb, pe), chunk by chunk; returns
+  // false when the time limit stopped it (the pass in flight is discarded).
+  auto samplePoints = [&](std::uint64_t pb, std::uint64_t pe, int k, bool mayStop) {
+    for (std::uint64_t begin = pb; begin < pe; begin += kChunk) {
+      const std::uint64_t end = std::min(pe, begin + kChunk);
       std::fill(pass.begin() + std::ptrdiff_t(begin), pass.begin() + std::ptrdiff_t(end), glm::vec3(0.0f));
       if (opt.integrator == Integrator::Path)
         PathChunk(ctx, tracer, begin, end, k, pass.data() + begin, st, raysCast);
       else
         WhittedChunk(ctx, tracer, begin, end, k, pass.data() + begin, st, raysCast);
       progress.Update(std::uint64_t(k) * nPoints + end, raysCast);
-      if (k > 0 && opt.timeLimit > 0.0 && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit && end < nPoints) {
-        aborted = true;  // the pass in flight is discarded
-        break;
+      if (mayStop && k > 0 && opt.timeLimit > 0.0 && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit && end < pe)
+        return false;
+    }
+    return true;
+  };
+
+  if (opt.nextRows) {
+    if (opt.writeEvery > 0 || opt.timeLimit > 0.0)
+      throw InputError("--write-every and --time-limit apply to a render by one process");
+    // Band by band, every sample of a band's points at once; SPD mode's
+    // pixels read the corner points of the row below too.
+    int y0 = 0, y1 = 0;
+    while (opt.nextRows(y0, y1)) {
+      const std::uint64_t pb = std::uint64_t(y0) * std::uint64_t(ctx.cw);
+      const std::uint64_t pe = std::min(nPoints, std::uint64_t(opt.spd ? y1 + 1 : y1) * std::uint64_t(ctx.cw));
+      // A corner row two bands share is computed again, to the same values.
+      std::fill(accum.begin() + std::ptrdiff_t(pb), accum.begin() + std::ptrdiff_t(pe), glm::vec3(0.0f));
+      for (int k = 0; k < opt.spp; ++k) {
+        samplePoints(pb, pe, k, false);
+        for (std::uint64_t i = pb; i < pe; ++i) accum[i] += pass[i];
       }
     }
-    if (aborted) {
-      st.timeLimited = true;
-      break;
-    }
-    for (std::uint64_t i = 0; i < nPoints; ++i) accum[i] += pass[i];
-    st.passes = k + 1;
-    if (opt.onImage && opt.writeEvery > 0 && st.passes % opt.writeEvery == 0 && st.passes < opt.spp)
-      opt.onImage(makeImage(st.passes), st.passes);
-    if (opt.timeLimit > 0.0 && st.passes < opt.spp && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit) {
-      st.timeLimited = true;
-      break;
+    st.passes = opt.spp;
+  } else {
+    for (int k = 0; k < opt.spp; ++k) {
+      if (!samplePoints(0, nPoints, k, true)) {
+        st.timeLimited = true;
+        break;
+      }
+      for (std::uint64_t i = 0; i < nPoints; ++i) accum[i] += pass[i];
+      st.passes = k + 1;
+      if (opt.onImage && opt.writeEvery > 0 && st.passes % opt.writeEvery == 0 && st.passes < opt.spp)
+        opt.onImage(makeImage(st.passes), st.passes);
+      if (opt.timeLimit > 0.0 && st.passes < opt.spp && ms(t0, Clock::now()) > 1000.0 * opt.timeLimit) {
+        st.timeLimited = true;
+        break;
+      }
     }
   }
   progress.Finish(raysCast);

@@ -73,6 +73,12 @@ struct RenderOptions {
   int writeEvery = 0;
   std::function<void(const Image&, int passes)> onImage;
   double timeLimit = 0.0;
+  // Part of the image only (distributed rendering, host/cli/cmd_render.cpp):
+  // when set, the render covers the image rows this hands out, [y0, y1) per
+  // call, until it returns false, each band with all its samples at once
+  // (no progressive output, no time limit); the other rows stay 0. A
+  // pixel's value does not depend on which rows are rendered with it.
+  std::function<bool(int& y0, int& y1)> nextRows;
 };
 
 // Ray counts of a render: how many rays of each kind were cast and how many
@@ -95,6 +101,9 @@ struct RenderStats {
   double traceMs = 0.0, shadeMs = 0.0, totalMs = 0.0;
 };
 void to_json(nlohmann::json& j, const RenderStats& s);
+// Another part's counts added to s (parts of one image: the times are the
+// slower part's, the passes the same).
+void AddRenderStats(RenderStats& s, const RenderStats& part);
 
 struct Image {
   int width = 0, height = 0;
