@@ -159,6 +159,17 @@ TEST_CASE("motion blur: rays with times, every structure x backend, robust and f
             CHECK(r.rays == rays.size());
             CHECK(r.wrong == 0);
           }
+      // Embree (the bench baseline): two time steps, its own BVH.
+      if (EmbreeAvailable())
+        for (const char* variant : {"single", "packet8"}) {
+          TraceConfig cfg;
+          cfg.backend = Backend::Embree;
+          cfg.variant = variant;
+          const auto r = test::CheckTracer(*scene, cfg, rays, IsOcclusionKind(kind), nullptr, &times);
+          INFO(scene->path, " ", std::string(RayKindName(kind)), " embree ", std::string(variant), ": ", r.wrong,
+               " wrong of ", r.rays);
+          CHECK(r.wrong == 0);
+        }
     }
   }
 }

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "host/core/error.h"
+#include "host/prims/prim_host.h"
 #include "kernels/types.h"
 
 // Our float tests (kernels/, robust mode) for the user geometries: the same
@@ -20,10 +21,16 @@ namespace cr::embree_kernels {
 
 namespace cr::embree {
 
-// User data of a user geometry: its primitives in place and their boxes.
+// User data of a user geometry: its primitives in place and their boxes,
+// per time step (bounds[step * count + primID]); in a scene with motion, the
+// unified motion array and the unified index of primID 0, for the ray's shift
+// into a piece's rest frame (kernels/motion.h).
 struct UserGeometry {
   const void* prims = nullptr;
+  unsigned count = 0;
   std::vector<RTCBounds> bounds;
+  const float* motion = nullptr;  // null for a static scene
+  std::uint32_t base = 0;
 };
 
 namespace {
@@ -54,12 +61,14 @@ const char* ErrorName(RTCError code)
 void UserBounds(const RTCBoundsFunctionArguments* args)
 {
   const auto* user = static_cast<const UserGeometry*>(args->geometryUserPtr);
-  *args->bounds_o = user->bounds[args->primID];
+  *args->bounds_o = user->bounds[std::size_t(args->timeStep) * user->count + args->primID];
 }
 
-// Lane i of a packet (N = 1 for rtcIntersect1) as the kernels' Ray: only the
-// origin and direction are read by the tests.
-embree_kernels::Ray LaneRay(RTCRayN* ray, unsigned N, unsigned i)
+// Lane i of a packet (N = 1 for rtcIntersect1) as the kernels' Ray as piece
+// primID of `user` sees it: only the origin and direction are read by the
+// tests; a moving piece's ray has its origin shifted by -time * motion, as
+// our backends shift it (kernels/motion.h Motion_Shift).
+embree_kernels::Ray LaneRay(RTCRayN* ray, unsigned N, unsigned i, const UserGeometry* user, unsigned primID)
 {
   embree_kernels::Ray r{};
   r.org[0] = RTCRayN_org_x(ray, N, i);
@@ -68,7 +77,10 @@ embree_kernels::Ray LaneRay(RTCRayN* ray, unsigned N, unsigned i)
   r.dir[0] = RTCRayN_dir_x(ray, N, i);
   r.dir[1] = RTCRayN_dir_y(ray, N, i);
   r.dir[2] = RTCRayN_dir_z(ray, N, i);
-  return r;
+  if (!user->motion) return r;
+  r.time = RTCRayN_time(ray, N, i);
+  embree_kernels::Ray moved;
+  return embree_kernels::Motion_Shift(user->motion, user->base + primID, &r, &moved) ? moved : r;
 }
 
 template <class T>
@@ -81,7 +93,7 @@ void UserIntersect(const RTCIntersectFunctionNArguments* args)
   RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, N);
   for (unsigned i = 0; i < N; ++i) {
     if (args->valid[i] != -1) continue;
-    const embree_kernels::Ray r = LaneRay(ray, N, i);
+    const embree_kernels::Ray r = LaneRay(ray, N, i, user, args->primID);
     float t = 0.0f, u = 0.0f, v = 0.0f;
     if (!KernelTest(&r, &prim, RTCRayN_tnear(ray, N, i), RTCRayN_tfar(ray, N, i), &t, &u, &v)) continue;
     RTCRayN_tfar(ray, N, i) = t;
@@ -107,7 +119,7 @@ void UserOccluded(const RTCOccludedFunctionNArguments* args)
   const unsigned N = args->N;
   for (unsigned i = 0; i < N; ++i) {
     if (args->valid[i] != -1) continue;
-    const embree_kernels::Ray r = LaneRay(args->ray, N, i);
+    const embree_kernels::Ray r = LaneRay(args->ray, N, i, user, args->primID);
     float t = 0.0f, u = 0.0f, v = 0.0f;
     if (!KernelTest(&r, &prim, RTCRayN_tnear(args->ray, N, i), RTCRayN_tfar(args->ray, N, i), &t, &u, &v)) continue;
     RTCRayN_tfar(args->ray, N, i) = -INFINITY;
@@ -167,6 +179,17 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
     rtcSetSceneFlags(scene_, options.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_MEDIUM);  // Embree's default
     const PrimRanges r = scene.Ranges();
+    // Motion blur (kernels/motion.h): in a scene with motion every geometry
+    // has two time steps, the pieces at rest (time 0) and moved by their
+    // motion (time 1), static pieces alike (equal steps); Embree
+    // interpolates linearly between them at the ray's time, which for a
+    // translation is the piece at that time. A static scene keeps one step.
+    motion_ = scene.UnifiedMotion();
+    const bool moving = scene.hasMotion;
+    const unsigned steps = moving ? 2u : 1u;
+    auto motionOf = [&](std::uint32_t g) {
+      return glm::vec3(motion_[4 * std::size_t(g)], motion_[4 * std::size_t(g) + 1], motion_[4 * std::size_t(g) + 2]);
+    };
     std::uint32_t geomID = 0;
     auto attach = [&](RTCGeometry geom, std::uint32_t base, const char* what) {
       rtcCommitGeometry(geom);
@@ -184,17 +207,42 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
       if constexpr (std::is_same_v<T, Sphere>) {
         RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_SPHERE_POINT);
         // Sphere is {centre[3], radius}: Embree's FLOAT4 point layout as is.
+        if (moving) rtcSetGeometryTimeStepCount(g, 2);
         rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, pieces.data(), 0, sizeof(Sphere), n);
+        if (moving) {  // time step 1: the centres moved
+          movedSpheres_.assign(pieces.begin(), pieces.end());
+          for (std::uint32_t i = 0; i < n; ++i) {
+            const glm::vec3 m = motionOf(r.begin[k] + i);
+            for (int a = 0; a < 3; ++a) movedSpheres_[i].center[a] += m[a];
+          }
+          rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 1, RTC_FORMAT_FLOAT4, movedSpheres_.data(), 0,
+                                     sizeof(Sphere), n);
+        }
         rtcSetGeometryOccludedFilterFunction(g, &RecordOccluder);
         attach(g, r.begin[k], "sphere geometry");
       } else if constexpr (std::is_same_v<T, Triangle>) {
         RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        if (moving) rtcSetGeometryTimeStepCount(g, 2);
         // Triangle holds v0, v1, v2 each in 16 bytes (xyz and a 4-byte field):
         // a vertex buffer of stride 16 read in place, vertex 3i + k being vk of
         // piece i; the last vertex is followed by its pad, so Embree's 16-byte
         // loads stay inside the array.
         rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, pieces.data(), 0, 16,
                                    std::size_t(n) * 3);
+        if (moving) {  // time step 1: the vertices moved, in the same layout
+          movedTriangles_.assign(pieces.begin(), pieces.end());
+          for (std::uint32_t i = 0; i < n; ++i) {
+            const glm::vec3 m = motionOf(r.begin[k] + i);
+            Triangle& t = movedTriangles_[i];
+            for (int a = 0; a < 3; ++a) {
+              t.v0[a] += m[a];
+              t.v1[a] += m[a];
+              t.v2[a] += m[a];
+            }
+          }
+          rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 1, RTC_FORMAT_FLOAT3, movedTriangles_.data(), 0, 16,
+                                     std::size_t(n) * 3);
+        }
         indices_.resize(std::size_t(n) * 3);
         for (std::size_t i = 0; i < indices_.size(); ++i) indices_[i] = static_cast<std::uint32_t>(i);
         rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices_.data(), 0,
@@ -204,17 +252,40 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
       } else {
         auto user = std::make_unique<UserGeometry>();
         user->prims = pieces.data();
-        user->bounds.resize(n);
+        user->count = n;
+        user->bounds.resize(std::size_t(steps) * n);
+        if (moving) {
+          user->motion = motion_.data();
+          user->base = r.begin[k];
+        }
         for (std::uint32_t i = 0; i < n; ++i) {
-          const Bounds b = scene.UnifiedBounds(r.begin[k] + i);
+          // The box at rest (time step 0) and, with motion, moved (step 1):
+          // Embree bounds the piece at time tau by the two boxes linearly
+          // interpolated, which for a translation is the box at tau.
+          Bounds b[2];
+          b[0] = FloatBounds(pieces[i]);
+          b[1] = b[0];
+          if (moving) {
+            const glm::vec3 m = motionOf(r.begin[k] + i);
+            for (int a = 0; a < 3; ++a) {
+              b[1].lo[a] = FloatDown(double(b[0].lo[a]) + double(m[a]));
+              b[1].hi[a] = FloatUp(double(b[0].hi[a]) + double(m[a]));
+            }
+          }
           // A few ulps of slack: the float test may report a point a rounding
-          // error outside the exact surface's box.
-          const float pad = 1e-6f * std::max({std::fabs(b.lo.x), std::fabs(b.lo.y), std::fabs(b.lo.z),
-                                              std::fabs(b.hi.x), std::fabs(b.hi.y), std::fabs(b.hi.z), 1e-30f});
-          user->bounds[i] = RTCBounds{b.lo.x - pad, b.lo.y - pad, b.lo.z - pad, 0.0f,
-                                      b.hi.x + pad, b.hi.y + pad, b.hi.z + pad, 0.0f};
+          // error outside the exact surface's box (one slack for both steps).
+          float scale = 1e-30f;
+          for (unsigned s = 0; s < steps; ++s)
+            scale = std::max({scale, std::fabs(b[s].lo.x), std::fabs(b[s].lo.y), std::fabs(b[s].lo.z),
+                              std::fabs(b[s].hi.x), std::fabs(b[s].hi.y), std::fabs(b[s].hi.z)});
+          const float pad = 1e-6f * scale;
+          for (unsigned s = 0; s < steps; ++s)
+            user->bounds[std::size_t(s) * n + i] =
+                RTCBounds{b[s].lo.x - pad, b[s].lo.y - pad, b[s].lo.z - pad, 0.0f,
+                          b[s].hi.x + pad, b[s].hi.y + pad, b[s].hi.z + pad, 0.0f};
         }
         RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+        if (moving) rtcSetGeometryTimeStepCount(g, 2);
         rtcSetGeometryUserPrimitiveCount(g, n);
         rtcSetGeometryUserData(g, user.get());
         rtcSetGeometryBoundsFunction(g, &UserBounds, nullptr);
@@ -234,7 +305,9 @@ EmbreeScene::EmbreeScene(const Scene& scene, const EmbreeOptions& options)
   }
   buildMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const std::int64_t held = monitored_.load();
-  bytes_ = std::uint64_t(held > 0 ? held : 0) + indices_.size() * sizeof(std::uint32_t);
+  bytes_ = std::uint64_t(held > 0 ? held : 0) + indices_.size() * sizeof(std::uint32_t) +
+           movedTriangles_.size() * sizeof(Triangle) + movedSpheres_.size() * sizeof(Sphere) +
+           motion_.size() * sizeof(float);
 }
 
 EmbreeScene::~EmbreeScene()

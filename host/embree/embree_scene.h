@@ -12,6 +12,11 @@
 //    calls our own float test, Type_Test in robust mode (kernels/<type>.h):
 //    Embree's own shapes beyond these two are not ours (its curves are
 //    swept circles along a spline, for one).
+// Motion blur (a scene with `motion`): Embree's own, every geometry with two
+// time steps, at rest and moved (static pieces: equal steps); Embree
+// interpolates vertices (triangles, sphere centres) and the user geometries'
+// boxes linearly at the ray's time, and the user geometries' tests shift the
+// ray into the piece's rest frame as our kernels do (kernels/motion.h).
 // Occlusion queries must report *some* occluder (FORMATS.md), which Embree's
 // rtcOccluded does not: an occlusion filter on each geometry records the
 // first accepted hit's g in the query context (OccluderContext).
@@ -69,6 +74,12 @@ class EmbreeScene {
   RTCScene scene_ = nullptr;
   std::vector<std::uint32_t> base_;      // by geomID
   std::vector<std::uint32_t> indices_;   // triangle index buffer (3 per piece)
+  // Motion blur only (empty for a static scene): the unified motion array
+  // (Scene::UnifiedMotion) the user geometries' tests read, and the time
+  // step 1 vertex buffers of the native geometries (pieces moved).
+  std::vector<float> motion_;
+  std::vector<Triangle> movedTriangles_;
+  std::vector<Sphere> movedSpheres_;
   std::vector<std::unique_ptr<UserGeometry>> users_;  // user data of the user geometries
   std::atomic<std::int64_t> monitored_{0};
   std::uint64_t bytes_ = 0;

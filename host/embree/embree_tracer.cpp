@@ -3,7 +3,9 @@
 // over blocks of rays). Variants: `single` (rtcIntersect1 / rtcOccluded1 per
 // ray) and `packet8` (rtcIntersect8 / rtcOccluded8 on 8 consecutive rays);
 // a `-robust` suffix builds the scene with RTC_SCENE_FLAG_ROBUST. The build
-// quality is Embree's default (medium). Geometry: embree_scene.h.
+// quality is Embree's default (medium). Geometry: embree_scene.h. Motion
+// blur: each ray's time goes to Embree (RTCRay::time), which interpolates the
+// scene's two time steps (embree_scene.h).
 // Hits are mapped to our HitRecord (scene-file ids, or unified indices for
 // the renderer), so `check` and `bench` judge Embree like any backend.
 #ifdef CELLRAY_HAVE_EMBREE
@@ -56,7 +58,6 @@ class EmbreeTracer final : public Tracer {
                                    "backends (--variant single-robust selects RTC_SCENE_FLAG_ROBUST)",
                                    PrecisionName(cfg.precision)));
     if (cfg.stats) throw InputError("--backend embree: Embree does not count Havran's measures (drop --stats)");
-    if (scene.hasMotion) throw InputError("--backend embree: scenes with motion are not supported yet");
     embree::EmbreeOptions opt;
     opt.robust = robust_;
     es_ = std::make_unique<EmbreeScene>(scene, opt);
@@ -75,11 +76,11 @@ class EmbreeTracer final : public Tracer {
     if (packet_) {
       const std::size_t nPackets = (rays.size() + kPacket - 1) / kPacket;
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nPackets, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) TracePacket(rays, hits, p * kPacket, occlusion);
+        for (std::size_t p = r.begin(); p != r.end(); ++p) TracePacket(rays, times, hits, p * kPacket, occlusion);
       });
     } else {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) hits[i] = TraceOne(rays[i], occlusion);
+        for (std::size_t i = r.begin(); i != r.end(); ++i) hits[i] = TraceOne(rays[i], TimeOf(times, i), occlusion);
       });
     }
   }
@@ -108,7 +109,10 @@ class EmbreeTracer final : public Tracer {
   // whose occluding leaf is looked up so.
   mutable std::atomic<std::uint64_t> occluderLookups_{0};
 
-  static void SetRay(RTCRay& r, const RayRecord& rec)
+  // Ray i's time in the shutter interval (0 without times).
+  static float TimeOf(const std::vector<float>& times, std::size_t i) { return times.empty() ? 0.0f : times[i]; }
+
+  static void SetRay(RTCRay& r, const RayRecord& rec, float time)
   {
     r.org_x = rec.org[0];
     r.org_y = rec.org[1];
@@ -117,7 +121,7 @@ class EmbreeTracer final : public Tracer {
     r.dir_x = rec.dir[0];
     r.dir_y = rec.dir[1];
     r.dir_z = rec.dir[2];
-    r.time = 0.0f;
+    r.time = time;
     r.tfar = rec.tmax;
     r.mask = 0xFFFFFFFFu;
     r.id = 0;
@@ -159,12 +163,12 @@ class EmbreeTracer final : public Tracer {
     return h;
   }
 
-  HitRecord Closest(const RayRecord& rec) const
+  HitRecord Closest(const RayRecord& rec, float time) const
   {
     OccluderContext c;
     InitContext(c, nullptr, 0);
     RTCRayHit rh;
-    SetRay(rh.ray, rec);
+    SetRay(rh.ray, rec, time);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(es_->Handle(), &c.ctx, &rh);
@@ -172,36 +176,37 @@ class EmbreeTracer final : public Tracer {
   }
 
   // An occluded ray whose occluder was not recorded: any hit is an occluder.
-  HitRecord LookUpOccluder(const RayRecord& rec) const
+  HitRecord LookUpOccluder(const RayRecord& rec, float time) const
   {
     ++occluderLookups_;
-    HitRecord h = Closest(rec);
+    HitRecord h = Closest(rec, time);
     if (h.prim != CR_NO_HIT) h.t = 0.0f;
     return h;
   }
 
-  HitRecord TraceOne(const RayRecord& rec, bool occlusion) const
+  HitRecord TraceOne(const RayRecord& rec, float time, bool occlusion) const
   {
-    if (!occlusion) return Closest(rec);
+    if (!occlusion) return Closest(rec, time);
     std::uint32_t occluder = CR_NO_HIT;
     OccluderContext c;
     InitContext(c, &occluder, 1);
     RTCRay r;
-    SetRay(r, rec);
+    SetRay(r, rec, time);
     rtcOccluded1(es_->Handle(), &c.ctx, &r);
     if (!(r.tfar < 0.0f)) return HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
-    if (occluder == CR_NO_HIT) return LookUpOccluder(rec);
+    if (occluder == CR_NO_HIT) return LookUpOccluder(rec, time);
     return RecordOfUnified(occluder, 0.0f, 0.0f, 0.0f, true);
   }
 
-  void TracePacket(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, std::size_t first,
-                   bool occlusion) const
+  void TracePacket(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+                   std::size_t first, bool occlusion) const
   {
     const std::size_t n = std::min(kPacket, rays.size() - first);
     alignas(32) int valid[kPacket];
     alignas(32) RTCRayHit8 rh;
     for (std::size_t i = 0; i < kPacket; ++i) {
-      const RayRecord& rec = rays[first + (i < n ? i : 0)];
+      const std::size_t j = first + (i < n ? i : 0);
+      const RayRecord& rec = rays[j];
       valid[i] = i < n ? -1 : 0;
       rh.ray.org_x[i] = rec.org[0];
       rh.ray.org_y[i] = rec.org[1];
@@ -210,7 +215,7 @@ class EmbreeTracer final : public Tracer {
       rh.ray.dir_x[i] = rec.dir[0];
       rh.ray.dir_y[i] = rec.dir[1];
       rh.ray.dir_z[i] = rec.dir[2];
-      rh.ray.time[i] = 0.0f;
+      rh.ray.time[i] = TimeOf(times, j);
       rh.ray.tfar[i] = rec.tmax;
       rh.ray.mask[i] = 0xFFFFFFFFu;
       rh.ray.id[i] = static_cast<unsigned>(i);
@@ -233,7 +238,7 @@ class EmbreeTracer final : public Tracer {
       if (!(rh.ray.tfar[i] < 0.0f))
         hits[first + i] = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
       else if (occluder[i] == CR_NO_HIT)
-        hits[first + i] = LookUpOccluder(rays[first + i]);
+        hits[first + i] = LookUpOccluder(rays[first + i], TimeOf(times, first + i));
       else
         hits[first + i] = RecordOfUnified(occluder[i], 0.0f, 0.0f, 0.0f, true);
     }
