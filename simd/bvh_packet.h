@@ -39,10 +39,20 @@ CR_SIMD_INLINE vbool<N> PacketBox_Intersect(const BVHNode& node, const RayPacket
 
 // Primitive g, known to be of type T, against the lanes of m; keeps each
 // lane's closer hit (Hit_Closer). Returns the lanes whose hit changed.
-template <int N, class T, bool kFast>
+// kMotion (a moving scene): a moving g meets the packet shifted into its
+// rest frame (simd/motion.h), its ties too, as Prim_Intersect does.
+template <int N, class T, bool kFast, bool kMotion = false>
 CR_SIMD_INLINE vbool<N> PacketPrim_IntersectAs(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                                HitPacket<N>& H, vbool<N> m)
 {
+  if constexpr (kMotion) {
+    float mv[3];
+    if (Motion_Of(sc, g, mv)) {
+      RayPacket<N> q;
+      RayPacket_Shift<N>(P, mv, q);
+      return PacketPrim_IntersectAs<N, T, kFast>(sc, g, q, H, m);
+    }
+  }
   vfloat<N> t, u(0.0f), v(0.0f);
   const PrimRanges& c = sc.ranges;
   const vbool<N> ok = SimdTest<T>::template Packet<N, kFast>(sc, g, P, m, H.t, t, u, v);
@@ -82,10 +92,10 @@ template <int N, unsigned kTypes, bool kFast>
 CR_SIMD_INLINE vbool<N> PacketPrim_Intersect(const KernelScene& sc, std::uint32_t g, const RayPacket<N>& P,
                                              HitPacket<N>& H, vbool<N> m)
 {
-#define CR_SIMD_PACKET_TYPE_(T, U, a)                                                \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                      \
-    if (IsLastType<kTypes>(CR_PRIM_##U) || g < Prim_End(&sc.ranges, CR_PRIM_##U))    \
-      return PacketPrim_IntersectAs<N, T, kFast>(sc, g, P, H, m);                    \
+#define CR_SIMD_PACKET_TYPE_(T, U, a)                                                 \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                       \
+    if (IsLastType<kTypes>(CR_PRIM_##U) || g < Prim_End(&sc.ranges, CR_PRIM_##U))     \
+      return PacketPrim_IntersectAs<N, T, kFast, kHasMotion<kTypes>>(sc, g, P, H, m); \
   }
   CR_PRIM_TYPES(CR_SIMD_PACKET_TYPE_)
 #undef CR_SIMD_PACKET_TYPE_
@@ -235,8 +245,9 @@ CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, 
 
 // The loop of every packet TraceRange: positions [job.begin, job.end) in
 // packets of N (image tiles when the job is an image), each traced by
-// trace(P, H, lanes, anyHit, st), hits stored.
-template <int N, bool kStats, class TraceFn>
+// trace(P, H, lanes, anyHit, st), hits stored. kMotion (a moving scene):
+// the packets carry their rays' times (TimedRayPacket).
+template <int N, bool kStats, bool kMotion, class TraceFn>
 CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
@@ -245,10 +256,11 @@ CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob
     const RayRecord* recs[N];
     std::uint32_t idx[N];
     const int count = Packet_Rays<N>(job, p, recs, idx);
-    RayPacket<N> P;
+    RayPacketOf<N, kMotion> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
     P.anyHit = job.occlusion != 0;
+    if constexpr (kMotion) P.time = Job_Times<N>(job, idx, count);
     trace(P, H, vbool<N>::FromBits((1u << count) - 1u), job.occlusion, st);
     Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }
@@ -259,10 +271,10 @@ CR_SIMD_INLINE void Packet_TraceRangeWith(const KernelScene& sc, const KernelJob
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void BVHPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
-                                                TraceStatsSum& st) {
-    BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
-  });
+  Packet_TraceRangeWith<N, kStats, kHasMotion<kTypes>>(
+      sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit, TraceStatsSum& st) {
+        BVHPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
+      });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -29,11 +29,23 @@ CR_SIMD_INLINE int Pack_SphereTieOrder(const KernelScene& sc, const PackRay<K>& 
   const float dir[3] = {pr.dir[0][0], pr.dir[1][0], pr.dir[2][0]};
   return Sphere_TieOrder(org, dir, pr.tmin[0], &ScenePrims<Sphere>(sc)[ga], &ScenePrims<Sphere>(sc)[gb]);
 }
+// The same on lane `lane` of a moving scene's pack ray, whose lanes each
+// piece shifts apart (PackRay_Shift): the ray as sphere ga sees it, as
+// Prim_Intersect asks Hit_CloserOn.
+template <int K>
+CR_SIMD_INLINE int Pack_SphereTieOrderAt(const KernelScene& sc, const PackRay<K>& pr, int lane, std::uint32_t ga,
+                                         std::uint32_t gb)
+{
+  const float org[3] = {pr.org[0][lane], pr.org[1][lane], pr.org[2][lane]};
+  const float dir[3] = {pr.dir[0][lane], pr.dir[1][lane], pr.dir[2][lane]};
+  return Sphere_TieOrder(org, dir, pr.tmin[0], &ScenePrims<Sphere>(sc)[ga], &ScenePrims<Sphere>(sc)[gb]);
+}
 
 // Keeps the pack's best hit if it is closer (Hit_Closer); true when the hit
 // changed. With `tieScene` set (a sphere pack in robust mode), ties between
-// spheres follow Hit_CloserOn: double-float distance first, then id.
-template <int K>
+// spheres follow Hit_CloserOn: double-float distance first, then id (kMotion:
+// on tieRay's lane of the challenging sphere, Pack_SphereTieOrderAt).
+template <int K, bool kMotion = false>
 CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K> v, const std::uint32_t* g, Hit& hit,
                                 const KernelScene* tieScene = nullptr, const PackRay<K>* tieRay = nullptr)
 {
@@ -45,12 +57,20 @@ CR_SIMD_INLINE bool Pack_Reduce(vbool<K> ok, vfloat<K> t, vfloat<K> u, vfloat<K>
   if (tieScene)
     for (unsigned rest = tied & (tied - 1u); rest; rest &= rest - 1u) {
       const int l = LowestBit(rest);
-      if (Pack_SphereTieOrder<K>(*tieScene, *tieRay, g[l], g[lane]) < 0) lane = l;
+      if constexpr (kMotion) {
+        if (Pack_SphereTieOrderAt<K>(*tieScene, *tieRay, l, g[l], g[lane]) < 0) lane = l;
+      } else {
+        if (Pack_SphereTieOrder<K>(*tieScene, *tieRay, g[l], g[lane]) < 0) lane = l;
+      }
     }
   const std::uint32_t gl = g[lane];
   bool closer;
   if (tieScene && best == hit.t && gl != hit.g && hit.g < Prim_End(&tieScene->ranges, CR_PRIM_SPHERE)) {
-    const int order = Pack_SphereTieOrder<K>(*tieScene, *tieRay, gl, hit.g);
+    int order;
+    if constexpr (kMotion)
+      order = Pack_SphereTieOrderAt<K>(*tieScene, *tieRay, lane, gl, hit.g);
+    else
+      order = Pack_SphereTieOrder<K>(*tieScene, *tieRay, gl, hit.g);
     closer = order != 0 ? order < 0 : gl < hit.g;
   } else {
     closer = Hit_Closer(best, gl, &hit);
@@ -71,7 +91,9 @@ CR_SIMD_INLINE vbool<K> Pack_Valid(const std::uint32_t* g)
 
 // `count` packs of type T from `first` (SimdTest<T>::Pack). Returns true to
 // stop (an occlusion query has its occluder); `changed` when the hit changed.
-template <class T, int K, bool kFast, bool kStats>
+// kMotion (a moving scene): each lane's piece meets the ray shifted into its
+// rest frame (PackRay_Shift).
+template <class T, int K, bool kFast, bool kStats, bool kMotion>
 CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, std::uint32_t first, int count, const PackRay<K>& pr,
                                            Hit& hit, int anyHit, TraceStatsSum& st, bool& changed)
 {
@@ -86,6 +108,16 @@ CR_SIMD_INLINE bool WideLeaf_IntersectType(const KernelScene& sc, std::uint32_t 
     const vbool<K> valid = Pack_Valid<K>(pk.g);
     if constexpr (kStats) st.nIT += PopCount(valid.Bits());
     vfloat<K> t, u(0.0f), v(0.0f);
+    if constexpr (kMotion) {
+      PackRay<K> shifted;
+      const PackRay<K>& ray = PackRay_Shift<K>(sc, pk.g, valid, pr, shifted) ? shifted : pr;
+      const vbool<K> ok = valid & SimdTest<T>::template Pack<K, kFast>(sc, pk, valid, ray, vfloat<K>(hit.t), t, u, v);
+      if (Pack_Reduce<K, true>(ok, t, u, v, pk.g, hit, kTies ? &sc : nullptr, &ray)) {
+        changed = true;
+        if (anyHit) return true;
+      }
+      continue;
+    }
     const vbool<K> ok = valid & SimdTest<T>::template Pack<K, kFast>(sc, pk, valid, pr, vfloat<K>(hit.t), t, u, v);
     if (Pack_Reduce<K>(ok, t, u, v, pk.g, hit, kTies ? &sc : nullptr, &pr)) {
       changed = true;
@@ -107,21 +139,22 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, std::uint32_t p, s
     // One type: its packs, straight from the slot.
     const std::uint32_t type = (meta >> 16) - 1u;
     const int count = static_cast<int>(meta & 0xffffu);
-#define CR_SIMD_LEAF_RUN_(T, U, a)                                                                 \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                      \
-    if (type == CR_PRIM_##U) {                                                                     \
-      WideLeaf_IntersectType<T, K, kFast, kStats>(sc, p, count, pr, hit, anyHit, st, changed);      \
-      return changed;                                                                              \
+#define CR_SIMD_LEAF_RUN_(T, U, a)                                                                                 \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                                      \
+    if (type == CR_PRIM_##U) {                                                                                     \
+      WideLeaf_IntersectType<T, K, kFast, kStats, kHasMotion<kTypes>>(sc, p, count, pr, hit, anyHit, st, changed); \
+      return changed;                                                                                              \
     }
     CR_PRIM_TYPES(CR_SIMD_LEAF_RUN_)
 #undef CR_SIMD_LEAF_RUN_
     return false;
   }
   const WideLeaf& leaf = sc.wideLeaves[p];
-#define CR_SIMD_LEAF_TYPE_(T, U, a)                                                                          \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                                \
-    if (WideLeaf_IntersectType<T, K, kFast, kStats>(sc, leaf.first[CR_PRIM_##U], leaf.count[CR_PRIM_##U], pr, \
-                                                    hit, anyHit, st, changed))                               \
+#define CR_SIMD_LEAF_TYPE_(T, U, a)                                                                               \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                                     \
+    if (WideLeaf_IntersectType<T, K, kFast, kStats, kHasMotion<kTypes>>(sc, leaf.first[CR_PRIM_##U],              \
+                                                                        leaf.count[CR_PRIM_##U], pr, hit, anyHit, \
+                                                                        st, changed))                             \
       return true;
   CR_PRIM_TYPES(CR_SIMD_LEAF_TYPE_)
 #undef CR_SIMD_LEAF_TYPE_
@@ -149,8 +182,9 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
     nearHi[a] = ray.inv[a] < 0.0f;
   }
   const vfloat<N> tmin(ray.tmin);
-  PackRay<K> pr;
+  PackRayOf<K, kHasMotion<kTypes>> pr;
   PackRay_Init<K>(pr, ray);
+  if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
   pr.anyHit = anyHit != 0;
   std::uint32_t ref = 0, meta = 0;
   for (;;) {
@@ -250,8 +284,9 @@ CR_SIMD_INLINE void RayPacket_Extract(const RayPacket<N>& P, const HitPacket<N>&
 // ray at a time, each traced by trace(ray, hit, anyHit, st). Rays are
 // prepared N at a time by the packet's vectorised Ray_Init (RayPacket_Init),
 // which has no data-dependent branches, unlike the scalar Ray_Init that an
-// incoherent ray set would make mispredict on every ray.
-template <int N, bool kStats, class TraceFn>
+// incoherent ray set would make mispredict on every ray. kMotion (a moving
+// scene): each ray also takes its time (Ray::time).
+template <int N, bool kStats, bool kMotion, class TraceFn>
 CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob& job, TraceFn&& trace)
 {
   const PrimView pv = MakePrimView(sc);
@@ -266,6 +301,7 @@ CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob
     Ray rays[N];
     RayPacket_Extract<N>(P, H, rays);
     for (int l = 0; l < count; ++l) {
+      if constexpr (kMotion) rays[l].time = Job_Time(job, idx[l]);
       Hit hit;
       Hit_Init(&hit, &rays[l]);
       trace(rays[l], hit, job.occlusion, st);
@@ -279,9 +315,10 @@ CR_SIMD_INLINE void Single_TraceRangeWith(const KernelScene& sc, const KernelJob
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
 void BVHSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
-    BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
-  });
+  Single_TraceRangeWith<N, kStats, kHasMotion<kTypes>>(
+      sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
+        BVHSingle_Trace<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
+      });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

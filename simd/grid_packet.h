@@ -130,10 +130,10 @@ CR_SIMD_INLINE void GridPacket_Trace(const KernelScene& sc, const RayPacket<N>& 
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void GridPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Packet_TraceRangeWith<N, kStats>(sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit,
-                                                TraceStatsSum& st) {
-    GridPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
-  });
+  Packet_TraceRangeWith<N, kStats, kHasMotion<kTypes>>(
+      sc, job, [&](RayPacket<N>& P, HitPacket<N>& H, vbool<N> lanes, int anyHit, TraceStatsSum& st) {
+        GridPacket_Trace<N, kTypes, kFast, kStats>(sc, P, H, lanes, anyHit, st);
+      });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

@@ -18,8 +18,9 @@ namespace cr::simd::CR_SIMD_NS {
 // grid g, one ray at a time: rays prepared and entered N at a time, then
 // walk(ray, hit, first, tEnter) for each ray that enters, from its first
 // cell and entry parameter; the answers to job.hits. Serves the uniform grid
-// and the hierarchical grid (simd/hgrid_single.h).
-template <int N, bool kFast, class Walk>
+// and the hierarchical grid (simd/hgrid_single.h). kMotion (a moving scene):
+// each ray also takes its time (Ray::time).
+template <int N, bool kFast, bool kMotion, class Walk>
 CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
 {
   const PrimView pv = MakePrimView(sc);
@@ -42,6 +43,7 @@ CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, 
     Ray rays[N];
     RayPacket_Extract<N>(P, H, rays);
     for (int l = 0; l < count; ++l) {
+      if constexpr (kMotion) rays[l].time = Job_Time(job, idx[l]);
       const Ray& ray = rays[l];
       Hit hit;
       Hit_Init(&hit, &ray);
@@ -60,12 +62,15 @@ void GridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   const GridHeader& g = *sc.gridHeader;
   TraceStatsSum st;
-  GridSingle_Rays<N, kFast>(sc, g, job, [&](const Ray& ray, Hit& hit, const int first[3], float) {
-    PackRay<4> pr;
-    PackRay_Init<4>(pr, ray);
-    pr.anyHit = job.occlusion != 0;
-    GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, pr, ray, hit, first, job.occlusion, st);
-  });
+  GridSingle_Rays<N, kFast, kHasMotion<kTypes>>(
+      sc, g, job, [&](const Ray& ray, Hit& hit, const int first[3], float) {
+        PackRayOf<4, kHasMotion<kTypes>> pr;
+        PackRay_Init<4>(pr, ray);
+        if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
+        pr.anyHit = job.occlusion != 0;
+        GridSingle_Walk<kTypes, kFast, kStats>(sc, g, sc.gridNodes, sc.gridRefs, pr, ray, hit, first, job.occlusion,
+                                               st);
+      });
   if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 

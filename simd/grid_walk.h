@@ -98,7 +98,8 @@ CR_SIMD_INLINE void GridSingle_EnterAt(const GridHeader& g, const Ray& ray, floa
 
 // The walk of one ray through grid g (cell offsets cellStart, references
 // refs) from cell `first` (not yet tested) on; `pr` the ray prepared for
-// the 4-wide primitive tests (PackRay_Init, anyHit set); `hit` from Hit_Init
+// the 4-wide primitive tests (PackRay_Init, anyHit set; a moving scene's a
+// TimedPackRay with its time, simd/motion.h); `hit` from Hit_Init
 // or the hit so far; true when an any-hit query is answered. The walk keeps the
 // crossing parameter of each axis's next plane and recomputes only the axis
 // it stepped: the other two planes have not changed, so their parameters

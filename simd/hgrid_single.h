@@ -23,8 +23,9 @@ template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], float tEnter,
                                      int anyHit, TraceStatsSum& st)
 {
-  PackRay<4> pr;
+  PackRayOf<4, kHasMotion<kTypes>> pr;
   PackRay_Init<4>(pr, ray);
+  if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
   pr.anyHit = anyHit != 0;
   const std::uint32_t* refs = sc.hgridRefs;
   int step[3];
@@ -128,9 +129,10 @@ template <int N, unsigned kTypes, bool kFast, bool kStats>
 void HGridSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
   TraceStatsSum st;
-  GridSingle_Rays<N, kFast>(sc, *sc.hgridHeader, job, [&](const Ray& ray, Hit& hit, const int first[3], float tEnter) {
-    HGridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, tEnter, job.occlusion, st);
-  });
+  GridSingle_Rays<N, kFast, kHasMotion<kTypes>>(
+      sc, *sc.hgridHeader, job, [&](const Ray& ray, Hit& hit, const int first[3], float tEnter) {
+        HGridSingle_Walk<kTypes, kFast, kStats>(sc, ray, hit, first, tEnter, job.occlusion, st);
+      });
   if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }
 

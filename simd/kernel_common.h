@@ -20,6 +20,7 @@ namespace cr::simd::CR_SIMD_NS {
 
 #include "simd/intersect_simd.h"
 #include "simd/rays.h"
+#include "simd/motion.h"
 #include "simd/prims.h"
 
 namespace cr::simd::CR_SIMD_NS {
@@ -32,8 +33,12 @@ inline constexpr int kBVHStack = 64;
 template <unsigned kTypes>
 inline constexpr bool IsLastType(unsigned k)
 {
-  return (kTypes >> (k + 1u)) == 0u;
+  return ((kTypes & kAllTypes) >> (k + 1u)) == 0u;
 }
+
+// Whether a kernel of type set kTypes serves a moving scene (kMotionBit).
+template <unsigned kTypes>
+inline constexpr bool kHasMotion = (kTypes & kMotionBit) != 0u;
 
 // The scene's arrays as the scalar kernels' PrimView (Hit_ToRecord).
 inline PrimView MakePrimView(const KernelScene& sc)
@@ -81,7 +86,8 @@ inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
 // reference its type), and every type (kAllTypes) for any other scene. A
 // leaf or cell holds its references sorted by unified index, so each type's
 // run is found once per leaf (prim_range.h); a type the scene lacks has an
-// empty run, one comparison per leaf.
+// empty run, one comparison per leaf. A moving scene, whatever its types,
+// takes kAllTypes | kMotionBit instead (SelectMotionKernel).
 template <unsigned kTypes>
 struct TypesTag {
   static constexpr unsigned kValue = kTypes;
@@ -103,6 +109,16 @@ KernelFn SelectKernel(const KernelKey& key, Pick pick)
   if (key.types == kSphereBit) return SelectFlags<Pick, kSphereBit>(key, pick);
   if (key.types == kTriangleBit) return SelectFlags<Pick, kTriangleBit>(key, pick);
   return SelectFlags<Pick, kAllTypes>(key, pick);
+}
+// The same for a moving scene (key.motion): kAllTypes | kMotionBit, the only
+// type set whose primitive tests shift the rays (simd/motion.h). Called from
+// the motion units only (kernels_motion_*.cpp), so that the units of the
+// static kernels compile exactly what they compiled before motion existed.
+template <class Pick>
+KernelFn SelectMotionKernel(const KernelKey& key, Pick pick)
+{
+  if (key.types == 0) return nullptr;
+  return SelectFlags<Pick, kAllTypes | kMotionBit>(key, pick);
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

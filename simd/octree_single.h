@@ -51,8 +51,9 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
   const float rootExit = FMinS(FMinS(t1[0], t1[1]), t1[2]);
   if (!(FMaxS(rootEnter, ray.tmin) <= FMinS(rootExit, hit.t))) return;
   if constexpr (kStats) ++st.nTS;
-  PackRay<4> pr;
+  PackRayOf<4, kHasMotion<kTypes>> pr;
   PackRay_Init<4>(pr, ray);
+  if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
   pr.anyHit = anyHit != 0;
   // Octree_Leaf: true when the query is answered.
   auto leaf = [&](const OctreeNode& n, float tExit) {
@@ -145,9 +146,10 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 void OctreeSingle_TraceRange(const KernelScene& sc, const KernelJob& job)
 {
-  Single_TraceRangeWith<N, kStats>(sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
-    OctreeSingle_Trace<kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
-  });
+  Single_TraceRangeWith<N, kStats, kHasMotion<kTypes>>(
+      sc, job, [&](const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st) {
+        OctreeSingle_Trace<kTypes, kFast, kStats>(sc, ray, hit, anyHit, st);
+      });
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

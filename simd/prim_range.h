@@ -37,14 +37,15 @@ CR_SIMD_INLINE std::uint32_t Refs_RunEnd(const std::uint32_t* refs, std::uint32_
 
 // The primitives of refs[i, e), all of type T, against the lanes of m.
 // Occlusion (anyHit): a lane leaves m at its first hit and joins `done`.
-template <int N, class T, bool kFast, bool kStats>
+// kMotion: a moving scene's (PacketPrim_IntersectAs).
+template <int N, class T, bool kFast, bool kStats, bool kMotion>
 CR_SIMD_INLINE void PacketRun_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t i,
                                         std::uint32_t e, const RayPacket<N>& P, HitPacket<N>& H, vbool<N>& m,
                                         int anyHit, unsigned& done, TraceStatsSum& st)
 {
   for (; i < e; ++i) {
     if constexpr (kStats) st.nIT += PopCount(m.Bits());
-    const vbool<N> changed = PacketPrim_IntersectAs<N, T, kFast>(sc, refs[i], P, H, m);
+    const vbool<N> changed = PacketPrim_IntersectAs<N, T, kFast, kMotion>(sc, refs[i], P, H, m);
     if (anyHit) {
       const unsigned cb = changed.Bits();
       if (cb) {
@@ -64,11 +65,12 @@ CR_SIMD_INLINE void PacketRefs_Intersect(const KernelScene& sc, const std::uint3
                                          int anyHit, unsigned& done, TraceStatsSum& st)
 {
   std::uint32_t i = begin;
-#define CR_SIMD_PACKET_RUN_(T, U, a)                                                                         \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                                             \
-    const std::uint32_t e = Refs_RunEnd<kTypes, CR_PRIM_##U>(refs, i, end, sc.ranges);                       \
-    if (i < e && Any(m)) PacketRun_Intersect<N, T, kFast, kStats>(sc, refs, i, e, P, H, m, anyHit, done, st); \
-    i = e;                                                                                                   \
+#define CR_SIMD_PACKET_RUN_(T, U, a)                                                                           \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                                                \
+    const std::uint32_t e = Refs_RunEnd<kTypes, CR_PRIM_##U>(refs, i, end, sc.ranges);                         \
+    if (i < e && Any(m))                                                                                       \
+      PacketRun_Intersect<N, T, kFast, kStats, kHasMotion<kTypes>>(sc, refs, i, e, P, H, m, anyHit, done, st); \
+    i = e;                                                                                                     \
   }
   CR_PRIM_TYPES(CR_SIMD_PACKET_RUN_)
 #undef CR_SIMD_PACKET_RUN_
@@ -76,8 +78,9 @@ CR_SIMD_INLINE void PacketRefs_Intersect(const KernelScene& sc, const std::uint3
 
 // One ray against the primitives of refs[i, e), all of type T, 4 at a time
 // (SimdTest<T>::Gather). Returns true when the hit changed (occlusion: at
-// the first change).
-template <class T, bool kFast, bool kStats>
+// the first change). kMotion (a moving scene): each lane's piece meets the
+// ray shifted into its rest frame (PackRay_Shift).
+template <class T, bool kFast, bool kStats, bool kMotion>
 CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t i,
                                      std::uint32_t e, const PackRay<4>& pr, Hit& hit, int anyHit, TraceStatsSum& st)
 {
@@ -91,6 +94,26 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
     for (int l = 0; l < K; ++l) g[l] = refs[i + (std::uint32_t(l) < count ? std::uint32_t(l) : count - 1)];
     const vbool<K> valid = vbool<K>::FromBits((1u << count) - 1u);
     vfloat<K> t, u(0.0f), v(0.0f);
+    if constexpr (kMotion) {
+      // The lanes' pieces meet the ray in their rest frames; the rest as below.
+      PackRay<K> shifted;
+      const PackRay<K>& ray = PackRay_Shift<K>(sc, g, vbool<K>(true), pr, shifted) ? shifted : pr;
+      const vbool<K> ok = SimdTest<T>::template Gather<kFast>(sc, g, ray, vfloat<K>(hit.t), t, u, v);
+      if (anyHit) {
+        const unsigned bits = (valid & ok).Bits();
+        if (!bits) continue;
+        const int lane = LowestBit(bits);
+        const float tl = t[lane];
+        if (!Hit_Closer(tl, g[lane], &hit)) continue;
+        hit.t = tl;
+        hit.u = u[lane];
+        hit.v = v[lane];
+        hit.g = g[lane];
+        return true;
+      }
+      if (Pack_Reduce<K, true>(valid & ok, t, u, v, g, hit, kTies ? &sc : nullptr, &ray)) changed = true;
+      continue;
+    }
     const vbool<K> ok = SimdTest<T>::template Gather<kFast>(sc, g, pr, vfloat<K>(hit.t), t, u, v);
     if (anyHit) {
       // The first occluder in reference order, as the scalar loop finds it
@@ -119,14 +142,14 @@ CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t
 {
   bool changed = false;
   std::uint32_t i = begin;
-#define CR_SIMD_RAY_RUN_(T, U, a)                                                     \
-  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                      \
-    const std::uint32_t e = Refs_RunEnd<kTypes, CR_PRIM_##U>(refs, i, end, sc.ranges); \
-    if (RayRun_Intersect<T, kFast, kStats>(sc, refs, i, e, pr, hit, anyHit, st)) {    \
-      if (anyHit) return true;                                                       \
-      changed = true;                                                                \
-    }                                                                                \
-    i = e;                                                                           \
+#define CR_SIMD_RAY_RUN_(T, U, a)                                                                      \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u) {                                                        \
+    const std::uint32_t e = Refs_RunEnd<kTypes, CR_PRIM_##U>(refs, i, end, sc.ranges);                 \
+    if (RayRun_Intersect<T, kFast, kStats, kHasMotion<kTypes>>(sc, refs, i, e, pr, hit, anyHit, st)) { \
+      if (anyHit) return true;                                                                         \
+      changed = true;                                                                                  \
+    }                                                                                                  \
+    i = e;                                                                                             \
   }
   CR_PRIM_TYPES(CR_SIMD_RAY_RUN_)
 #undef CR_SIMD_RAY_RUN_
@@ -145,7 +168,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
 {
   for (unsigned bits = m.Bits(); bits; bits &= bits - 1u) {
     const int l = LowestBit(bits);
-    PackRay<4> pr;
+    PackRayOf<4, kHasMotion<kTypes>> pr;
     for (int a = 0; a < 3; ++a) {
       pr.org[a] = vfloat<4>(P.org[a][l]);
       pr.dir[a] = vfloat<4>(P.dir[a][l]);
@@ -156,6 +179,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
     pr.tmin = vfloat<4>(P.tmin[l]);
     pr.dd = vfloat<4>(P.dd[l]);
     pr.anyHit = anyHit != 0;
+    if constexpr (kHasMotion<kTypes>) pr.time = RayPacket_Time<N>(P)[l];
     Hit hit;
     hit.t = H.t[l];
     hit.u = H.u[l];

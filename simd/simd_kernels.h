@@ -19,6 +19,12 @@ namespace cr::simd {
 // traversals are instantiated for the sets of kernel_common.h SelectKernel.
 inline constexpr unsigned kSphereBit = 1u << CR_PRIM_SPHERE, kTriangleBit = 1u << CR_PRIM_TRIANGLE;
 inline constexpr unsigned kAllTypes = (1u << CR_NUM_PRIM_TYPES) - 1u;
+// A bit of a kernel's type set past the types: the scene moves (NFF
+// `motion`, kernels/motion.h), and every primitive test shifts the ray into
+// the rest frame of a moving piece (simd/motion.h). Static scenes run kernels
+// without it, which compile nothing of motion.
+inline constexpr unsigned kMotionBit = 1u << 31;
+static_assert(CR_NUM_PRIM_TYPES < 31, "kMotionBit lies past the type bits");
 
 // A type's index k (CR_PRIM_*) from its layout.
 template <class T>
@@ -111,6 +117,7 @@ struct KernelKey {
   bool fast = false;    // Precision::Fast (else robust)
   bool stats = false;   // counts Havran's measures
   bool packet = false;  // ray packets (else one ray at a time)
+  bool motion = false;  // the scene moves (KernelScene::motion): SelectMotion<Name>Kernel
 };
 
 // Answer of one ray-primitive test, for the lane-by-lane unit tests.
@@ -146,8 +153,12 @@ enum class PacketOrder { Input, DirectionClasses, DirectionClassesWhenPays };
 // variant (key.packet; the BVH's from SelectPacketKernel and
 // SelectSingleKernel, which walk different layouts), nullptr when the scene
 // has no primitives; <Name>PacketOrder its packets' order.
-#define CR_DECLARE_SIMD_SELECT_(N, U, l, H, Nd) \
-  KernelFn Select##N##Kernel(const KernelKey& key); \
+// SelectMotion<Name>Kernel gives a moving scene's kernels (key.motion; the
+// type set kAllTypes | kMotionBit, in units of their own,
+// kernels_motion_*.cpp).
+#define CR_DECLARE_SIMD_SELECT_(N, U, l, H, Nd)           \
+  KernelFn Select##N##Kernel(const KernelKey& key);       \
+  KernelFn SelectMotion##N##Kernel(const KernelKey& key); \
   PacketOrder N##PacketOrder();
 #define CR_DECLARE_SIMD_ISA(ns)                      \
   namespace ns {                                     \

@@ -10,7 +10,9 @@
 // docs/SIMD.md for the measurements behind it).
 // What this backend does not implement is delegated to the scalar backend
 // (the kernels of kernels/ compiled as C++), and VariantName says so:
-// --isa scalar and --precision fp64.
+// --isa scalar and --precision fp64. A moving scene (NFF `motion`) takes
+// kernels of its own (kMotionBit, simd/motion.h); a static one never runs
+// their code.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -59,31 +61,42 @@ constexpr double kAutoPacketFraction = 0.5;
 constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
 
 struct IsaEntry {
-  KernelFn (*select[CR_NUM_ACCEL_TYPES])(const KernelKey&);  // by KernelAccel
+  KernelFn (*select[CR_NUM_ACCEL_TYPES])(const KernelKey&);        // by KernelAccel
+  KernelFn (*selectMotion[CR_NUM_ACCEL_TYPES])(const KernelKey&);  // a moving scene's (key.motion)
   PacketOrder (*order[CR_NUM_ACCEL_TYPES])();
   KernelProbes (*probes)();
 
-  KernelFn Select(const KernelKey& key) const { return select[static_cast<int>(key.accel)](key); }
+  KernelFn Select(const KernelKey& key) const
+  {
+    const int a = static_cast<int>(key.accel);
+    return key.motion ? selectMotion[a](key) : select[a](key);
+  }
 };
 
 IsaEntry EntryOf(Isa isa)
 {
 #if defined(CELLRAY_SIMD_X86)
 #define CR_SIMD_ENTRY_SELECT_(N, U, l, H, Nd) &ns::Select##N##Kernel,
+#define CR_SIMD_ENTRY_MOTION_(N, U, l, H, Nd) &ns::SelectMotion##N##Kernel,
 #define CR_SIMD_ENTRY_ORDER_(N, U, l, H, Nd) &ns::N##PacketOrder,
+#define CR_SIMD_ENTRY_                                                               \
+  {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_MOTION_)}, \
+   {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes}
 #if defined(CELLRAY_SIMD_AVX2)
   if (isa == Isa::Avx2) {
     namespace ns = avx2;
-    return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
+    return CR_SIMD_ENTRY_;
   }
 #endif
 #if defined(CELLRAY_SIMD_SSE4)
   if (isa == Isa::Sse4) {
     namespace ns = sse4;
-    return {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes};
+    return CR_SIMD_ENTRY_;
   }
 #endif
+#undef CR_SIMD_ENTRY_
 #undef CR_SIMD_ENTRY_ORDER_
+#undef CR_SIMD_ENTRY_MOTION_
 #undef CR_SIMD_ENTRY_SELECT_
 #endif
   throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
@@ -95,7 +108,7 @@ KernelAccel KernelAccelOf(AccelKind k) { return static_cast<KernelAccel>(k); }
 class SimdTracer final : public Tracer {
  public:
   SimdTracer(const Scene& scene, const TraceConfig& cfg, Isa isa, Variant variant)
-      : config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds())
+      : config_(cfg), isa_(isa), variant_(variant), primIds_(scene.UnifiedIds()), motion_(scene.UnifiedMotion())
   {
     data_ = BuildAccel(scene, cfg.accel, cfg.params);
     info_ = data_.info;
@@ -123,6 +136,7 @@ class SimdTracer final : public Tracer {
     if (wide_) wide_->Bind(sc_);
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
+    sc_.motion = motion_.empty() ? nullptr : motion_.data();
 
     KernelKey key;
     key.accel = KernelAccelOf(cfg.accel);
@@ -130,6 +144,7 @@ class SimdTracer final : public Tracer {
     scene.ForEachType([&](const auto& pieces, std::uint32_t k) { key.types |= pieces.empty() ? 0u : 1u << k; });
     key.fast = cfg.precision == Precision::Fast;
     key.stats = cfg.stats;
+    key.motion = sc_.motion != nullptr;
     key.packet = true;
     packetFn_ = e.Select(key);
     packetOrder_ = e.order[static_cast<int>(key.accel)]();
@@ -143,6 +158,10 @@ class SimdTracer final : public Tracer {
   {
     hits.resize(rays.size());
     traced_ = true;
+    if (!times.empty() && times.size() != rays.size())
+      throw RuntimeError(fmt::format("simd: {} ray times for {} rays", times.size(), rays.size()));
+    // Times matter to a moving scene's kernels only.
+    const float* rayTimes = sc_.motion && !times.empty() ? times.data() : nullptr;
     const bool wantStats = config_.stats && stats;
     TraceStatsSum sum;
     if (!packetFn_) {
@@ -174,7 +193,7 @@ class SimdTracer final : public Tracer {
       else if (rays.size() < kPilotMinRays)
         usedPacket_ = false;
       else
-        usedPacket_ = Pilot(rays, hits, occlusion, wantStats ? &sum : nullptr, packetOrder, order);
+        usedPacket_ = Pilot(rays, rayTimes, hits, occlusion, wantStats ? &sum : nullptr, packetOrder, order);
       if (usedPacket_ && order.empty() && !packetOrder.empty()) order = std::move(packetOrder);
       std::uint32_t imageWidth = 0;
       if (usedPacket_ && order.empty()) {
@@ -189,7 +208,7 @@ class SimdTracer final : public Tracer {
         else if (w > 0)
           order = TileOrder(rays.size(), w, int(tileW), 2);
       }
-      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, hits, order, imageWidth, occlusion,
+      Run(usedPacket_ ? packetFn_ : singleFn_, usedPacket_, rays, rayTimes, hits, order, imageWidth, occlusion,
           wantStats ? &sum : nullptr);
     }
     if (wantStats) {
@@ -215,6 +234,7 @@ class SimdTracer final : public Tracer {
   Variant variant_;
   AccelData data_;
   std::vector<std::uint32_t> primIds_;
+  std::vector<float> motion_;  // Scene::UnifiedMotion, empty for a static scene
   std::unique_ptr<SimdPrimData> rows_;
   std::unique_ptr<WideBVHBase> wide_;
   KernelScene sc_;
@@ -227,9 +247,10 @@ class SimdTracer final : public Tracer {
   // Traces positions [0, n) of `order`, or when order is empty of the rays
   // themselves (in image tiles when imageWidth > 0, KernelJob), parallel over
   // blocks of whole packets: small enough to balance the threads, large
-  // enough to amortise the scheduling.
-  void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits,
-           const std::vector<std::uint32_t>& order, std::uint32_t imageWidth, bool occlusion, TraceStatsSum* sum) const
+  // enough to amortise the scheduling. times: per ray, or null (KernelJob).
+  void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, const float* times,
+           std::vector<HitRecord>& hits, const std::vector<std::uint32_t>& order, std::uint32_t imageWidth,
+           bool occlusion, TraceStatsSum* sum) const
   {
     const std::size_t n = order.empty() ? rays.size() : order.size();
     const std::size_t unit = packet ? std::size_t(width_) : 1;
@@ -239,6 +260,7 @@ class SimdTracer final : public Tracer {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nUnits, grain), [&](const tbb::blocked_range<std::size_t>& r) {
       KernelJob job;
       job.rays = rays.data();
+      job.times = times;
       job.hits = hits.data();
       job.order = order.empty() ? nullptr : order.data();
       job.imageWidth = imageWidth;
@@ -305,8 +327,8 @@ class SimdTracer final : public Tracer {
   // variant wins depends on the scene as much as on the rays (docs/SIMD.md:
   // on random rays packets win on balls and tree, single rays on gears and
   // teapot), so no ray-set statistic predicts it as well.
-  bool Pilot(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* sum,
-             const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
+  bool Pilot(const std::vector<RayRecord>& rays, const float* times, std::vector<HitRecord>& hits, bool occlusion,
+             TraceStatsSum* sum, const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
   {
     // seq: the positions in the order to trace them (the rays themselves when empty).
     const std::size_t n = seq.empty() ? rays.size() : seq.size();
@@ -327,6 +349,7 @@ class SimdTracer final : public Tracer {
       const std::size_t b = (i / 2) * stride + (i & 1);
       KernelJob job;
       job.rays = rays.data();
+      job.times = times;
       job.hits = hits.data();
       job.order = seq.empty() ? nullptr : seq.data();
       job.begin = b * kPilotBlock;
@@ -386,8 +409,6 @@ std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& 
     why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
   else if (config.precision == Precision::Fp64)
     why = "fp64 delegated";
-  else if (scene.hasMotion)
-    why = "motion delegated";
   if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
   return std::make_unique<SimdTracer>(scene, config, isa, variant);
 }
