@@ -43,7 +43,7 @@ def main():
     ap.add_argument("--size", default="256x256")
     ap.add_argument("--scenes", default=",".join(SPD))
     ap.add_argument("--modes", default="tiles,bands")
-    ap.add_argument("--tile-rows", type=int, default=4)
+    ap.add_argument("--tile-rows", type=int, default=32)
     ap.add_argument("--backend", default="simd")
     ap.add_argument("-o", "--output")
     a = ap.parse_args()

@@ -125,7 +125,7 @@ Run RegisterRender(CLI::App& app)
     bool spd = false, fresnel = false, noProgress = false;
     std::uint64_t seed = 1;
     std::string distribute = "tiles";
-    int tileRows = 4;
+    int tileRows = 32;
     TracerOptions t;
   };
   auto o = std::make_shared<O>();
