@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstring>
 #include <type_traits>
+#include <array>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -29,6 +30,9 @@ struct DistInfo {
   int tileRows = 0;
   std::vector<double> busyMs, wallMs;  // per rank
   std::vector<std::uint64_t> bands;    // bands (tiles) rendered per rank
+  // Rank 0's tiles: rows [y0, y1) and the ms it took to render them (with
+  // one rank, every tile: the costs bench/mpi_simulate.py plans from).
+  std::vector<std::array<double, 3>> tiles;
   std::uint64_t bytes = 0, messages = 0;
   double assembleMs = 0.0;
 };
@@ -49,7 +53,15 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, co
   const std::int64_t nTiles = (h + tileRows - 1) / tileRows;
   mpi::WorkCounter counter(mode == "tiles" ? nTiles : 0);
   bool bandGiven = false;
+  std::vector<double> tileMs;
+  auto last = std::chrono::steady_clock::now();
+  auto closeTile = [&]() {
+    const auto now = std::chrono::steady_clock::now();
+    if (tileMs.size() < mine.size()) tileMs.push_back(std::chrono::duration<double, std::milli>(now - last).count());
+    last = now;
+  };
   ro.nextRows = [&](int& y0, int& y1) {
+    closeTile();
     if (mode == "tiles") {
       const std::int64_t t = counter.Next();
       if (t < 0) return false;
@@ -68,6 +80,9 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, co
   };
   const auto t0 = std::chrono::steady_clock::now();
   Image part = Render(scene, tracer, ro, &stats);
+  closeTile();
+  for (std::size_t i = 0; i < mine.size() && i < tileMs.size(); ++i)
+    info.tiles.push_back({double(mine[i].first), double(mine[i].second), tileMs[i]});
   const double busy = stats.totalMs;
   // This rank's rows: (y0, y1) then the floats of rows [y0, y1), per band.
   std::vector<char> packed;
@@ -126,6 +141,7 @@ Run RegisterRender(CLI::App& app)
     std::uint64_t seed = 1;
     std::string distribute = "tiles";
     int tileRows = 32;
+    bool tileCosts = false;
     TracerOptions t;
   };
   auto o = std::make_shared<O>();
@@ -161,6 +177,9 @@ Run RegisterRender(CLI::App& app)
                   "hypercube paper's static bands, one per rank); docs/DISTRIBUTED.md")
       ->capture_default_str();
   cmd->add_option("--tile-rows", o->tileRows, "Rows per tile of --distribute tiles (1..4096)")->capture_default_str();
+  cmd->add_flag("--tile-costs", o->tileCosts,
+                "Render tile by tile even in one process and report each tile's time in the JSON (mpi.tiles: the "
+                "costs bench/mpi_simulate.py plans from)");
   AddTracerOptions(cmd, o->t);
   return [o]() {
     if (o->distribute == "bands-data")
@@ -170,7 +189,7 @@ Run RegisterRender(CLI::App& app)
       throw InputError(fmt::format("--distribute '{}': expected tiles or bands", o->distribute));
     if (o->tileRows < 1 || o->tileRows > 4096) throw InputError(fmt::format("--tile-rows {} is not in 1..4096", o->tileRows));
     const bool distributed = mpi::Distributed();
-    if (distributed && (o->writeEvery > 0 || o->timeLimit > 0.0))
+    if ((distributed || o->tileCosts) && (o->writeEvery > 0 || o->timeLimit > 0.0))
       throw InputError("--write-every and --time-limit apply to a render by one process (not under mpirun)");
     TraceConfig cfg = o->t.ToConfig();
     cfg.unifiedHits = true;
@@ -199,7 +218,9 @@ Run RegisterRender(CLI::App& app)
     else throw InputError(fmt::format("--sides '{}': expected auto, one or two", o->sides));
     if (ro.spd && (ro.spp != 1 || o->fresnel)) throw InputError("--spd fixes one sample per pixel corner and no Fresnel");
     if (o->areaLights < 0.0) throw InputError(fmt::format("--area-lights {}: the radius must be > 0", o->areaLights));
+    const auto tLoad = std::chrono::steady_clock::now();
     Scene scene = LoadScene(o->scene);
+    const double loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tLoad).count();
     if (o->areaLights > 0.0) PointLightsToSpheres(scene, o->areaLights);
     ro.onImage = [o](const Image& img, int passes) {
       WriteImage(o->out, img.width, img.height, img.rgb);
@@ -208,7 +229,7 @@ Run RegisterRender(CLI::App& app)
     auto tracer = CreateTracer(scene, cfg);
     RenderStats stats;
     DistInfo dist;
-    Image img = distributed ? RenderDistributed(scene, *tracer, ro, o->distribute, o->tileRows, stats, dist)
+    Image img = distributed || o->tileCosts ? RenderDistributed(scene, *tracer, ro, o->distribute, o->tileRows, stats, dist)
                             : Render(scene, *tracer, ro, &stats);
     if (mpi::Rank() != 0) return 0;  // rank 0 writes and reports
     WriteImage(o->out, img.width, img.height, img.rgb);
@@ -226,9 +247,10 @@ Run RegisterRender(CLI::App& app)
                      {"area_lights", scene.areaLights.size()},
                      {"time_limited", stats.timeLimited},
                      {"spd", ro.spd},
+                     {"load_ms", loadMs},
                      {"build_ms", tracer->Info().buildMs},
                      {"stats", stats}};
-    if (distributed) {
+    if (distributed || o->tileCosts) {
       double wall = 0.0;
       for (double w : dist.wallMs) wall = std::max(wall, w);
       nlohmann::json ranks = nlohmann::json::array();
@@ -239,7 +261,7 @@ Run RegisterRender(CLI::App& app)
                          {"bands", dist.bands[std::size_t(r)]}});
       j["mpi"] = {{"ranks", dist.ranks},         {"distribute", dist.mode},    {"tile_rows", dist.tileRows},
                   {"wall_ms", wall},             {"assemble_ms", dist.assembleMs}, {"bytes_sent", dist.bytes},
-                  {"messages_sent", dist.messages}, {"per_rank", ranks}};
+                  {"messages_sent", dist.messages}, {"per_rank", ranks}, {"tiles", dist.tiles}};
     }
     if (!tracer->FallbackReason().empty()) {
       j["fallback_from"] = "opencl";
