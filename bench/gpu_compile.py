@@ -95,6 +95,9 @@ def build_options(precision, types_present, all_types, accel, anyhit, variant, s
     o += [f"-DCR_PACKET_W={PACKET[0]}", f"-DCR_PACKET_H={PACKET[1]}"]
     if not generic:
         o += [f"-DCR_HAS_{t}={int(t in types_present)}" for t in all_types]
+        # Static scenes (a moving scene's programs are the generic ones'
+        # motion code, compiled in every generic configuration).
+        o.append("-DCR_HAS_MOTION=0")
         o += ["-DCR_ACCEL_ONE", f"-DCR_ACCEL_{accel}"]
         o += [f"-DCR_ANYHIT={anyhit}", "-DCR_UNIFIED=0"]
         o.append("-DCR_VARIANT_PACKET" if variant == "packet" else "-DCR_VARIANT_RAY")

@@ -301,7 +301,15 @@ class ClTracer final : public Tracer {
       SetArg(k, 2 * t + 1, cl_uint(Prim_Count(&r, t)), name);
     }
     SetArg(k, kArgPrimIds, primIds_, name);
-    SetArg(k, kArgMotion, motion_, name);
+    if (hasMotion_) {
+      SetArg(k, kArgMotion, motion_, name);
+    } else {
+      // A static scene: a null pointer (OpenCL 1.2 allows one for a global
+      // buffer argument), which a generic program's kernels/motion.h tests.
+      const cl_mem none = nullptr;
+      CR_CL_CHECK_WHAT(k.setArg(kArgMotion, sizeof(cl_mem), &none), "clSetKernelArg",
+                       fmt::format("{} argument {}", name, unsigned(kArgMotion)));
+    }
     for (cl_uint a = 0; a < 3 * CR_NUM_ACCEL_TYPES; ++a) SetArg(k, kArgAccelArrays + a, accel_[a], name);
     SetArg(k, kArgAccel, cl_int(AccelArg(config_.accel)), name);
     SetArg(k, kArgUnified, cl_int(config_.unifiedHits ? 1 : 0), name);
@@ -341,7 +349,8 @@ class ClTracer final : public Tracer {
     });
     primIds_ = ClUpload(cl_, "primitive ids", ids.data(), ids.size() * sizeof(std::uint32_t));
     const std::vector<float> motion = scene_.UnifiedMotion();
-    motion_ = motion.empty() ? dummy_ : ClUpload(cl_, "motion", motion.data(), motion.size() * sizeof(float));
+    hasMotion_ = !motion.empty();
+    if (hasMotion_) motion_ = ClUpload(cl_, "motion", motion.data(), motion.size() * sizeof(float));
     for (auto& b : accel_) b = dummy_;
     // The built structure's header, nodes and references (the others keep
     // the placeholder).
@@ -412,6 +421,7 @@ class ClTracer final : public Tracer {
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
   cl::Buffer dummy_, prims_[CR_NUM_PRIM_TYPES], primIds_, motion_, timeBuf_;
   std::size_t timeCapacity_ = 0;
+  bool hasMotion_ = false;
   cl::Event lastLaunch_;
   double lastKernelMs_ = -1.0;
   cl::Buffer accel_[3 * CR_NUM_ACCEL_TYPES];  // per structure: header, nodes, references
