@@ -9,9 +9,12 @@ frame) and from the whole job's wall time (process start to exit, scene
 loading and structure building included: every rank builds its own).
 
   python3 bench/mpi_efficiency.py [--ranks 2] [--threads 1] [--size 256x256]
-        [--scenes balls,gears,...] [--modes tiles,bands] [-o results.json]
+        [--scenes balls,gears,...|path.obj] [--modes tiles,bands,bands-data] [-o results.json]
 
-Prints a Markdown table; writes the figures as JSON with -o.
+Prints a Markdown table; with bands-data, a second one: the hypercube
+paper's heuristic measured (per band: the share of its rays that left the
+band, rays it passed on, bytes per ray, the pieces its structure holds, its
+structure's bytes and peak memory). Writes the figures as JSON with -o.
 """
 import argparse
 import json
@@ -54,7 +57,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         for scene in a.scenes.split(","):
             path = scene if os.path.exists(scene) else f"scenes/spd/{scene}.nff"
-            base = [a.binary, "render", path, "--spd", "--size", a.size, "--backend", a.backend,
+            base = [a.binary, "render", path] + (["--spd"] if path.endswith(".nff") else []) + ["--size", a.size, "--backend", a.backend,
                     "--threads", str(a.threads), "--no-progress"]
             one_img = os.path.join(tmp, "one.exr")
             one, one_wall = run(base + ["-o", one_img])
@@ -72,7 +75,10 @@ def main():
                              "idle_ms": [r["idle_ms"] for r in m["per_rank"]],
                              "bands": [r["bands"] for r in m["per_rank"]],
                              "bytes": m["bytes_sent"], "messages": m["messages_sent"],
+                             "peak_rss_mib": [r["peak_rss_mib"] for r in m["per_rank"]],
                              "bit_identical": same})
+                if mode == "bands-data":
+                    rows[-1]["bands_data"] = [r["bands_data"] for r in m["per_rank"]]
                 r = rows[-1]
                 print(f"{scene} {mode}: {r['efficiency']:.3f} (job {r['job_efficiency']:.3f}) identical={same}",
                       file=sys.stderr)
@@ -84,6 +90,21 @@ def main():
               f"{r['job_efficiency']:.3f} | {', '.join(f'{b:.0f}' for b in r['busy_ms'])} | "
               f"{', '.join(f'{b:.0f}' for b in r['idle_ms'])} | {', '.join(str(b) for b in r['bands'])} | "
               f"{r['bytes']} | {r['messages']} | {'yes' if r['bit_identical'] else 'NO'} |")
+    bd = [r for r in rows if "bands_data" in r]
+    if bd:
+        print()
+        print("| scene | band | own rays | left band (rays) | left band (shadow) | passed on | received "
+              "| bytes per own ray | pieces held | structure KiB | peak MiB |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in bd:
+            per = r["bands_data"]
+            own_all = sum(b["own_rays"] + b["own_shadow_rays"] for b in per)
+            for k, b in enumerate(per):
+                own, sh = b["own_rays"], b["own_shadow_rays"]
+                print(f"| {r['scene']} | {k} | {own + sh} | {100.0 * b['left_rays'] / max(own, 1):.1f}% | "
+                      f"{100.0 * b['left_shadow_rays'] / max(sh, 1):.1f}% | {b['forwarded']} | {b['received']} | "
+                      f"{r['bytes'] / max(own_all, 1):.1f} | {b['local_pieces']} of {b['total_pieces']} | "
+                      f"{b['structure_bytes'] / 1024:.0f} | {r['peak_rss_mib'][k]:.0f} |")
     if a.output:
         with open(a.output, "w") as f:
             json.dump(rows, f, indent=2)

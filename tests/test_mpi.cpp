@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "host/core/file_util.h"
 #include "tests/test_util.h"
@@ -52,7 +53,7 @@ bool SameBytes(const fs::path& a, const fs::path& b)
 
 }  // namespace
 
-TEST_CASE("mpi: render with 2 ranks in tiles and bands is bit-identical to one process")
+TEST_CASE("mpi: render with 2 ranks in tiles, bands and bands-data is bit-identical to one process")
 {
   if (!HaveMpirun()) {
     MESSAGE("mpirun not found: skipped");
@@ -70,7 +71,7 @@ TEST_CASE("mpi: render with 2 ranks in tiles and bands is bit-identical to one p
   for (const Case& c : cases) {
     const fs::path one = d / "one.exr";
     REQUIRE(Run(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one.log") == 0);
-    for (const char* mode : {"tiles", "bands"}) {
+    for (const char* mode : {"tiles", "bands", "bands-data"}) {
       const fs::path two = d / fmt::format("two_{}.exr", mode);
       const int rc = Run(2, fmt::format("render {} {} --distribute {} --tile-rows 3 -o {}", c.scene, c.args, mode, two.string()),
                          d / "two.log");
@@ -81,6 +82,45 @@ TEST_CASE("mpi: render with 2 ranks in tiles and bands is bit-identical to one p
       CHECK(SameBytes(one, two));
       CHECK(text.find("\"ranks\":2") != std::string::npos);
     }
+  }
+}
+
+TEST_CASE("mpi: bands-data with 4 ranks passes rays between bands and gives the single process's image")
+{
+  if (!HaveMpirun()) return;
+  const fs::path d = Dir();
+  struct Case {
+    const char* scene;
+    const char* args;
+  };
+  // SPD shadows towards lights above (tree: the ground's shadow rays all
+  // go up to the tree's band), a thin lens (rays that start off the eye),
+  // moving pieces with the path tracer.
+  const Case cases[] = {{"scenes/spd/tree.nff", "--spd --size 64x64 --backend simd"},
+                        {"scenes/distributed/dof.nff", "--spp 2 --size 48x48 --backend scalar --accel octree"},
+                        {"scenes/distributed/motion.nff", "--integrator path --spp 2 --size 48x32 --backend simd --accel grid"}};
+  for (const Case& c : cases) {
+    const fs::path one = d / "one4.exr", four = d / "four.exr", json = d / "four.json";
+    REQUIRE(Run(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one4.log") == 0);
+    const int rc = Run(4, fmt::format("render {} {} --distribute bands-data -o {} --stats {}", c.scene, c.args,
+                                      four.string(), json.string()),
+                       d / "four.log");
+    const auto log = ReadFile((d / "four.log").string());
+    INFO(std::string(c.scene), ": ", std::string(log.begin(), log.end()));
+    CHECK(rc == 0);
+    CHECK(SameBytes(one, four));
+    // Every rank holds part of the scene; rays crossed bands.
+    const auto js = ReadFile(json.string());
+    const nlohmann::json j = nlohmann::json::parse(std::string(js.begin(), js.end()));
+    REQUIRE(j["mpi"]["per_rank"].size() == 4);
+    std::uint64_t forwarded = 0, pieces = 0;
+    for (const auto& r : j["mpi"]["per_rank"]) {
+      forwarded += r["bands_data"]["forwarded"].get<std::uint64_t>();
+      pieces += r["bands_data"]["local_pieces"].get<std::uint64_t>();
+      CHECK(r["bands_data"]["local_pieces"].get<std::uint64_t>() < r["bands_data"]["total_pieces"].get<std::uint64_t>());
+    }
+    CHECK(forwarded > 0);
+    CHECK(pieces > 0);
   }
 }
 

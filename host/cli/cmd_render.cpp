@@ -7,6 +7,8 @@
 #include <iostream>
 #include <memory>
 
+#include <sys/resource.h>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
@@ -14,6 +16,7 @@
 #include "host/cli/commands.h"
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/mpi/band_tracer.h"
 #include "host/mpi/mpi.h"
 #include "host/render/image_io.h"
 #include "host/render/renderer.h"
@@ -29,20 +32,22 @@ struct DistInfo {
   int ranks = 1;
   int tileRows = 0;
   std::vector<double> busyMs, wallMs;  // per rank
+  std::vector<double> peakMiB;         // per rank: peak resident memory
   std::vector<std::uint64_t> bands;    // bands (tiles) rendered per rank
   // Rank 0's tiles: rows [y0, y1) and the ms it took to render them (with
   // one rank, every tile: the costs bench/mpi_simulate.py plans from).
   std::vector<std::array<double, 3>> tiles;
   std::uint64_t bytes = 0, messages = 0;
   double assembleMs = 0.0;
+  std::vector<BandStats> bandStats;  // bands-data: per rank
 };
 
 // Renders this rank's part of the image (tiles handed out by a shared
 // counter, or the rank's static band), and assembles the frame on rank 0:
 // each rank sends its rows, rank 0 copies them into place. Other ranks get
 // an empty image. Stats are summed over ranks on rank 0.
-Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, const std::string& mode, int tileRows,
-                        RenderStats& stats, DistInfo& info)
+Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, RenderOptions ro, const std::string& mode,
+                        int tileRows, RenderStats& stats, DistInfo& info)
 {
   const int h = ro.height > 0 ? ro.height : scene.camera.height;
   const int ranks = mpi::Size(), rank = mpi::Rank();
@@ -83,7 +88,23 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, co
   closeTile();
   for (std::size_t i = 0; i < mine.size() && i < tileMs.size(); ++i)
     info.tiles.push_back({double(mine[i].first), double(mine[i].second), tileMs[i]});
-  const double busy = stats.totalMs;
+  double busy = stats.totalMs;
+  if (band) {
+    // Serve the other bands' rays until every band is done; time spent
+    // waiting in the rounds' exchanges is idle time.
+    band->Finish();
+    const BandStats& bs = band->Stats();
+    busy = stats.totalMs + bs.serveMs - bs.exchangeMs;
+    static_assert(std::is_trivially_copyable_v<BandStats>);
+    std::vector<char> bytes(sizeof(BandStats));
+    std::memcpy(bytes.data(), &bs, sizeof(BandStats));
+    const std::vector<char> all = mpi::GatherBytes(bytes);
+    for (std::size_t at = 0; at + sizeof(BandStats) <= all.size(); at += sizeof(BandStats)) {
+      BandStats r;
+      std::memcpy(&r, all.data() + at, sizeof(BandStats));
+      info.bandStats.push_back(r);
+    }
+  }
   // This rank's rows: (y0, y1) then the floats of rows [y0, y1), per band.
   std::vector<char> packed;
   const std::size_t rowFloats = std::size_t(part.width) * 3;
@@ -101,6 +122,11 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, RenderOptions ro, co
   const std::vector<char> all = mpi::GatherBytes(packed);
   const std::vector<char> allStats = mpi::GatherBytes(statsBytes);
   info.busyMs = mpi::GatherDouble(busy);
+  {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    info.peakMiB = mpi::GatherDouble(double(ru.ru_maxrss) / 1024.0);  // Linux: KiB
+  }
   info.wallMs = mpi::GatherDouble(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   std::vector<double> nb = mpi::GatherDouble(double(mine.size()));
   info.bytes = mpi::SumAll(mpi::BytesSent());
@@ -173,8 +199,9 @@ Run RegisterRender(CLI::App& app)
   cmd->add_option("--stats", o->statsPath, "Write ray statistics (JSON) to this file");
   cmd->add_flag("--no-progress", o->noProgress, "No progress bar on stderr");
   cmd->add_option("--distribute", o->distribute,
-                  "Under mpirun: tiles (dynamic tiles of --tile-rows rows, scene on every rank) or bands (the "
-                  "hypercube paper's static bands, one per rank); docs/DISTRIBUTED.md")
+                  "Under mpirun: tiles (dynamic tiles of --tile-rows rows, scene on every rank), bands (the "
+                  "hypercube paper's static bands, one per rank) or bands-data (the paper's data-parallel bands: each "
+                  "rank holds its band's primitives and passes rays on); docs/DISTRIBUTED.md")
       ->capture_default_str();
   cmd->add_option("--tile-rows", o->tileRows, "Rows per tile of --distribute tiles (1..4096)")->capture_default_str();
   cmd->add_flag("--tile-costs", o->tileCosts,
@@ -182,11 +209,8 @@ Run RegisterRender(CLI::App& app)
                 "costs bench/mpi_simulate.py plans from)");
   AddTracerOptions(cmd, o->t);
   return [o]() {
-    if (o->distribute == "bands-data")
-      throw InputError("--distribute bands-data (the paper's data-parallel bands) is not implemented yet; use tiles "
-                       "or bands");
-    if (o->distribute != "tiles" && o->distribute != "bands")
-      throw InputError(fmt::format("--distribute '{}': expected tiles or bands", o->distribute));
+    if (o->distribute != "tiles" && o->distribute != "bands" && o->distribute != "bands-data")
+      throw InputError(fmt::format("--distribute '{}': expected tiles, bands or bands-data", o->distribute));
     if (o->tileRows < 1 || o->tileRows > 4096) throw InputError(fmt::format("--tile-rows {} is not in 1..4096", o->tileRows));
     const bool distributed = mpi::Distributed();
     if ((distributed || o->tileCosts) && (o->writeEvery > 0 || o->timeLimit > 0.0))
@@ -226,11 +250,22 @@ Run RegisterRender(CLI::App& app)
       WriteImage(o->out, img.width, img.height, img.rgb);
       if (!o->noProgress) std::cerr << fmt::format("cellray: {} passes: wrote {}\n", passes, o->out);
     };
-    auto tracer = CreateTracer(scene, cfg);
+    std::unique_ptr<Tracer> tracer;
+    BandTracer* band = nullptr;
+    if (distributed && o->distribute == "bands-data") {
+      // Each rank's structure holds its band's primitives only (host/mpi/band_tracer.h).
+      const int w = ro.width > 0 ? ro.width : scene.camera.width, h = ro.height > 0 ? ro.height : scene.camera.height;
+      auto bt = std::make_unique<BandTracer>(scene, cfg, BandWedges::ForRows(MakeCameraFrame(scene.camera, w, h), mpi::Size()));
+      band = bt.get();
+      tracer = std::move(bt);
+    } else {
+      tracer = CreateTracer(scene, cfg);
+    }
     RenderStats stats;
     DistInfo dist;
-    Image img = distributed || o->tileCosts ? RenderDistributed(scene, *tracer, ro, o->distribute, o->tileRows, stats, dist)
-                            : Render(scene, *tracer, ro, &stats);
+    Image img = distributed || o->tileCosts
+                    ? RenderDistributed(scene, *tracer, band, ro, o->distribute, o->tileRows, stats, dist)
+                    : Render(scene, *tracer, ro, &stats);
     if (mpi::Rank() != 0) return 0;  // rank 0 writes and reports
     WriteImage(o->out, img.width, img.height, img.rgb);
     nlohmann::json j{{"scene", o->scene},
@@ -258,7 +293,10 @@ Run RegisterRender(CLI::App& app)
         ranks.push_back({{"rank", r},
                          {"busy_ms", dist.busyMs[std::size_t(r)]},
                          {"idle_ms", wall - dist.busyMs[std::size_t(r)]},
-                         {"bands", dist.bands[std::size_t(r)]}});
+                         {"bands", dist.bands[std::size_t(r)]},
+                         {"peak_rss_mib", dist.peakMiB[std::size_t(r)]}});
+      if (!dist.bandStats.empty())
+        for (int r = 0; r < dist.ranks; ++r) ranks[std::size_t(r)]["bands_data"] = dist.bandStats[std::size_t(r)];
       j["mpi"] = {{"ranks", dist.ranks},         {"distribute", dist.mode},    {"tile_rows", dist.tileRows},
                   {"wall_ms", wall},             {"assemble_ms", dist.assembleMs}, {"bytes_sent", dist.bytes},
                   {"messages_sent", dist.messages}, {"per_rank", ranks}, {"tiles", dist.tiles}};

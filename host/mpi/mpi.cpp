@@ -232,6 +232,48 @@ std::uint64_t SumAll(std::uint64_t v)
   return v;
 }
 
+void SumAll(std::uint64_t* v, int n)
+{
+#ifdef CELLRAY_HAVE_MPI
+  if (Distributed())
+    Check(MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD), "MPI_Allreduce");
+#else
+  (void)v;
+  (void)n;
+#endif
+}
+
+std::vector<std::vector<char>> Exchange(const std::vector<std::vector<char>>& out)
+{
+#ifdef CELLRAY_HAVE_MPI
+  if (Distributed()) {
+    const std::size_t n = std::size_t(gSize);
+    std::vector<int> sendCount(n), recvCount(n), sendAt(n), recvAt(n);
+    std::vector<char> send;
+    for (std::size_t r = 0; r < n; ++r) {
+      if (out[r].size() > std::size_t(1) << 30)
+        throw RuntimeError(fmt::format("MPI: a message of {} bytes to rank {} is over 1 GiB", out[r].size(), r));
+      sendAt[r] = int(send.size());
+      sendCount[r] = int(out[r].size());
+      send.insert(send.end(), out[r].begin(), out[r].end());
+      if (!out[r].empty() && int(r) != gRank) ++gMessages, gBytes += out[r].size();
+    }
+    Check(MPI_Alltoall(sendCount.data(), 1, MPI_INT, recvCount.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Alltoall");
+    std::size_t total = 0;
+    for (std::size_t r = 0; r < n; ++r) recvAt[r] = int(total), total += std::size_t(recvCount[r]);
+    std::vector<char> recv(total);
+    Check(MPI_Alltoallv(send.data(), sendCount.data(), sendAt.data(), MPI_BYTE, recv.data(), recvCount.data(),
+                        recvAt.data(), MPI_BYTE, MPI_COMM_WORLD),
+          "MPI_Alltoallv");
+    std::vector<std::vector<char>> in(n);
+    for (std::size_t r = 0; r < n; ++r)
+      in[r].assign(recv.begin() + recvAt[r], recv.begin() + recvAt[r] + recvCount[r]);
+    return in;
+  }
+#endif
+  return out;
+}
+
 std::uint64_t MessagesSent() { return gMessages; }
 std::uint64_t BytesSent() { return gBytes; }
 

@@ -66,6 +66,12 @@ std::vector<double> GatherDouble(double v);
 void Broadcast(std::vector<char>& bytes);
 // Sum over ranks, result on every rank.
 std::uint64_t SumAll(std::uint64_t v);
+// Element-wise sums over ranks of n counters, in place on every rank.
+void SumAll(std::uint64_t* v, int n);
+// Personalised all-to-all: out[r] goes to rank r (out has Size() entries;
+// an empty one sends nothing); returns what each rank sent here, by rank.
+// One process: returns out.
+std::vector<std::vector<char>> Exchange(const std::vector<std::vector<char>>& out);
 // Messages and bytes this rank has sent through these collectives.
 std::uint64_t MessagesSent();
 std::uint64_t BytesSent();
