@@ -58,7 +58,10 @@ constexpr double kAutoPacketFraction = 0.5;
 // Blocks this long keep the cache reuse of consecutive rays that the full
 // run has (with 64-ray blocks the pilot favoured single rays on shadow rays
 // that packets trace 1.5x faster); measurements in docs/SIMD.md.
-constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 65536;
+// From 16,384 rays (a render's tile of 32 rows of 513 points casts sets
+// of that size; below it such tiles all went to single rays) with fewer
+// pairs, the pilot at most a quarter of the set.
+constexpr std::size_t kPilotBlock = 512, kPilotBlocksEach = 8, kPilotMinRays = 16384;
 
 struct IsaEntry {
   KernelFn (*select[CR_NUM_ACCEL_TYPES])(const KernelKey&);        // by KernelAccel
@@ -335,7 +338,7 @@ class SimdTracer final : public Tracer {
     const std::size_t nBlocks = n / kPilotBlock;
     // Pairs of adjacent blocks (one packet, one single: rays of the same kind
     // and, in a class order, of the same class) spread over the sequence.
-    const std::size_t nPairs = std::min<std::size_t>(kPilotBlocksEach, nBlocks / 2);
+    const std::size_t nPairs = std::min<std::size_t>(kPilotBlocksEach, nBlocks / 8);
     const std::size_t nPilot = 2 * nPairs;
     const std::size_t stride = nBlocks / nPairs;
     std::vector<char> isPilot(nBlocks, 0);

@@ -431,8 +431,11 @@ class ClTracer final : public Tracer {
 
 }  // namespace
 
+std::unique_ptr<Tracer> CreateMultiDeviceTracer(const Scene& scene, const TraceConfig& config);  // cl_multi.cpp
+
 std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config)
 {
+  if (config.device == "all" || config.device.find(',') != std::string::npos) return CreateMultiDeviceTracer(scene, config);
   return std::make_unique<ClTracer>(scene, config);
 }
 

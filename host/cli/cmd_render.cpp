@@ -16,6 +16,7 @@
 #include "host/cli/commands.h"
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/mpi/band_plan.h"
 #include "host/mpi/band_tracer.h"
 #include "host/mpi/mpi.h"
 #include "host/render/image_io.h"
@@ -55,8 +56,19 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, Re
   info.ranks = ranks;
   info.tileRows = mode == "tiles" ? tileRows : 0;
   std::vector<std::pair<int, int>> mine;
-  const std::int64_t nTiles = (h + tileRows - 1) / tileRows;
-  mpi::WorkCounter counter(mode == "tiles" ? nTiles : 0);
+  // Tiles of tileRows rows, shrinking (guided) towards the end of the frame
+  // when several ranks share it: a quarter of each rank's share of the rows
+  // left, at least 4 rows, so that the ranks finish together without small
+  // batches all along. One process (--tile-costs): tiles of tileRows rows.
+  std::vector<std::pair<int, int>> tiles;
+  if (mode == "tiles")
+    for (int y = 0; y < h;) {
+      int rows = tileRows;
+      if (ranks > 1) rows = std::clamp((h - y + 4 * ranks - 1) / (4 * ranks), std::min(4, tileRows), tileRows);
+      tiles.emplace_back(y, std::min(h, y + rows));
+      y += rows;
+    }
+  mpi::WorkCounter counter(std::int64_t(tiles.size()));
   bool bandGiven = false;
   std::vector<double> tileMs;
   auto last = std::chrono::steady_clock::now();
@@ -70,8 +82,8 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, Re
     if (mode == "tiles") {
       const std::int64_t t = counter.Next();
       if (t < 0) return false;
-      y0 = int(t) * tileRows;
-      y1 = std::min(h, y0 + tileRows);
+      y0 = tiles[std::size_t(t)].first;
+      y1 = tiles[std::size_t(t)].second;
     } else {
       // The hypercube paper's bands: rank r holds rows [r h / N, (r + 1) h / N).
       if (bandGiven) return false;
@@ -166,8 +178,9 @@ Run RegisterRender(CLI::App& app)
     bool spd = false, fresnel = false, noProgress = false;
     std::uint64_t seed = 1;
     std::string distribute = "tiles";
-    int tileRows = 32;
+    int tileRows = 64;
     bool tileCosts = false;
+    std::vector<int> bandPlan;
     TracerOptions t;
   };
   auto o = std::make_shared<O>();
@@ -203,16 +216,24 @@ Run RegisterRender(CLI::App& app)
                   "hypercube paper's static bands, one per rank) or bands-data (the paper's data-parallel bands: each "
                   "rank holds its band's primitives and passes rays on); docs/DISTRIBUTED.md")
       ->capture_default_str();
-  cmd->add_option("--tile-rows", o->tileRows, "Rows per tile of --distribute tiles (1..4096)")->capture_default_str();
+  cmd->add_option("--tile-rows", o->tileRows, "Rows per tile of --distribute tiles (1..4096); under mpirun the last tiles shrink (guided, "
+                  "down to 4 rows) so that the ranks finish together")->capture_default_str();
   cmd->add_flag("--tile-costs", o->tileCosts,
                 "Render tile by tile even in one process and report each tile's time in the JSON (mpi.tiles: the "
                 "costs bench/mpi_simulate.py plans from)");
+  cmd->add_option("--band-plan", o->bandPlan,
+                  "One process: count, for each of these numbers of ranks, the rays --distribute bands-data would pass "
+                  "between bands and the pieces each band would hold (JSON band_plan; bench/mpi_simulate.py)")
+      ->delimiter(',');
   AddTracerOptions(cmd, o->t);
   return [o]() {
     if (o->distribute != "tiles" && o->distribute != "bands" && o->distribute != "bands-data")
       throw InputError(fmt::format("--distribute '{}': expected tiles, bands or bands-data", o->distribute));
     if (o->tileRows < 1 || o->tileRows > 4096) throw InputError(fmt::format("--tile-rows {} is not in 1..4096", o->tileRows));
     const bool distributed = mpi::Distributed();
+    if (!o->bandPlan.empty() && distributed) throw InputError("--band-plan is a one-process measurement (not under mpirun)");
+    for (int p : o->bandPlan)
+      if (p < 1 || p > 65535) throw InputError(fmt::format("--band-plan {}: a number of ranks in 1..65535", p));
     if ((distributed || o->tileCosts) && (o->writeEvery > 0 || o->timeLimit > 0.0))
       throw InputError("--write-every and --time-limit apply to a render by one process (not under mpirun)");
     TraceConfig cfg = o->t.ToConfig();
@@ -261,6 +282,13 @@ Run RegisterRender(CLI::App& app)
     } else {
       tracer = CreateTracer(scene, cfg);
     }
+    BandPlanTracer* plan = nullptr;
+    if (!o->bandPlan.empty()) {
+      const int w = ro.width > 0 ? ro.width : scene.camera.width, h = ro.height > 0 ? ro.height : scene.camera.height;
+      auto p = std::make_unique<BandPlanTracer>(scene, std::move(tracer), MakeCameraFrame(scene.camera, w, h), o->bandPlan);
+      plan = p.get();
+      tracer = std::move(p);
+    }
     RenderStats stats;
     DistInfo dist;
     Image img = distributed || o->tileCosts
@@ -301,6 +329,7 @@ Run RegisterRender(CLI::App& app)
                   {"wall_ms", wall},             {"assemble_ms", dist.assembleMs}, {"bytes_sent", dist.bytes},
                   {"messages_sent", dist.messages}, {"per_rank", ranks}, {"tiles", dist.tiles}};
     }
+    if (plan) j["band_plan"] = plan->Plans();
     if (!tracer->FallbackReason().empty()) {
       j["fallback_from"] = "opencl";
       j["fallback_reason"] = tracer->FallbackReason();

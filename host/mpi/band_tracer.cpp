@@ -52,10 +52,11 @@ struct Answer {
 static_assert(std::is_trivially_copyable_v<Answer>);
 
 template <class T>
-void Append(std::vector<char>& out, const T& v)
+void Append(std::vector<char>& out, const T* v, std::size_t n)
 {
-  const char* p = reinterpret_cast<const char*>(&v);
-  out.insert(out.end(), p, p + sizeof(T));
+  const std::size_t at = out.size();
+  out.resize(at + n * sizeof(T));
+  if (n) std::memcpy(out.data() + at, v, n * sizeof(T));
 }
 
 // The scene with only the pieces of `keep` (by unified index); toGlobal
@@ -121,6 +122,7 @@ BandWedges BandWedges::ForRows(const CameraFrame& frame, int n)
     // Never rising: an empty band (more ranks than rows) is an empty wedge.
     w.upper[std::size_t(r)] = std::min(w.upper[std::size_t(r) - 1], std::atan2(glm::dot(d, w.up), glm::dot(d, w.forward)));
   }
+  for (double a : w.upper) w.unit.emplace_back(std::cos(a), std::sin(a));
   return w;
 }
 
@@ -136,6 +138,23 @@ int BandWedges::WedgeOf(double angle) const
   for (int r = 0; r < n - 1; ++r)
     if (angle > upper[std::size_t(r) + 1]) return r;
   return n - 1;
+}
+
+int BandWedges::WedgeOfPoint(const glm::dvec2& q) const
+{
+  const int n = Count();
+  if (n == 1) return 0;
+  // Behind the plane of the eye: beyond the inner boundaries.
+  if (!(q.x > 0.0)) return q.y > 0.0 || (q.y == 0.0 && !std::signbit(q.y)) ? 0 : n - 1;
+  // In front: the first r whose lower boundary the point lies above
+  // (angle > upper[r + 1] when u x q > 0), boundaries falling with r.
+  int lo = 0, hi = n - 1;  // the answer is in [lo, hi]
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (Cross(unit[std::size_t(mid) + 1], q) > 0.0) hi = mid;
+    else lo = mid + 1;
+  }
+  return lo;
 }
 
 std::vector<bool> BandWedges::WedgesOfBox(const Bounds& box) const
@@ -183,15 +202,15 @@ BandWedges::Run BandWedges::RunOf(const RayRecord& ray) const
   const glm::dvec3 o(ray.org[0], ray.org[1], ray.org[2]);
   const glm::dvec3 d(ray.dir[0], ray.dir[1], ray.dir[2]);
   const glm::dvec2 a = Project(o), b(glm::dot(d, forward), glm::dot(d, up));
-  auto angleAt = [&](double t) {
+  auto wedgeAt = [&](double t) {
     glm::dvec2 q = std::isinf(t) ? b : t != 0.0 ? a + t * b : a;
     // On the axis itself (a ray from the eye): the direction it leaves in.
     if (q.x == 0.0 && q.y == 0.0) q = b;
     if (q.x == 0.0 && q.y == 0.0) q = a;
-    return std::atan2(q.y, q.x);
+    return WedgeOfPoint(q);
   };
-  const int s = WedgeOf(angleAt(double(ray.tmin)));
-  const int e = WedgeOf(angleAt(double(ray.tmax)));
+  const int s = wedgeAt(double(ray.tmin));
+  const int e = wedgeAt(double(ray.tmax));
   Run run;
   // Seen along the axis the ray turns counter-clockwise (elevation rising,
   // towards wedge 0) when a x b > 0; through the axis itself either way
@@ -207,8 +226,7 @@ double BandWedges::Exit(const RayRecord& ray, const Run& run, int k, double tPre
 {
   if (k >= run.hops) return double(ray.tmax);
   const int w = At(run, k);
-  const double beta = run.step < 0 ? upper[std::size_t(w)] : upper[std::size_t(w) + 1];
-  const glm::dvec2 u(std::cos(beta), std::sin(beta));
+  const glm::dvec2 u = run.step < 0 ? unit[std::size_t(w)] : unit[std::size_t(w) + 1];
   const glm::dvec3 o(ray.org[0], ray.org[1], ray.org[2]);
   const glm::dvec3 d(ray.dir[0], ray.dir[1], ray.dir[2]);
   const glm::dvec2 a = Project(o), b(glm::dot(d, forward), glm::dot(d, up));
@@ -229,7 +247,7 @@ struct BandTracer::Impl {
   std::unique_ptr<Tracer> local;  // null when no piece lies in this wedge
   std::vector<std::uint32_t> toGlobal;
   std::vector<Travel> queue;                // rays to trace here in the next round
-  std::vector<std::vector<char>> outbox;    // per rank: rays passed on, then answers
+  std::vector<std::vector<char>> outbox, inbox;  // per rank: rays passed on, then answers
   std::vector<std::vector<Travel>> fwdOut;  // per rank
   std::vector<std::vector<Answer>> ansOut;
   std::vector<HitRecord>* hits = nullptr;   // the answers of this rank's Trace call
@@ -304,15 +322,16 @@ struct BandTracer::Impl {
         HitRecord h = got[k];
         if (h.prim != CR_NO_HIT && config.unifiedHits) h.prim = toGlobal[h.prim];
         if (h.prim != CR_NO_HIT && (t.best.prim == CR_NO_HIT || (!occl && h.t < t.best.t))) t.best = h;
+        const double exit = t.hop >= t.hops ? double(t.ray.tmax) : Exit(t);
         const bool done = occl ? t.best.prim != CR_NO_HIT || t.hop >= t.hops
-                               : t.hop >= t.hops || (t.best.prim != CR_NO_HIT && double(t.best.t) <= Exit(t));
+                               : t.hop >= t.hops || (t.best.prim != CR_NO_HIT && double(t.best.t) <= exit);
         if (done) {
           Answered(t);
         } else {
           // A ray of this rank's that leaves its band (counted once: when it
           // starts in another band, Trace counted it).
           if (int(t.origin) == rank && t.hop == 0 && int(t.start) == rank) ++(occl ? stats->leftShadowRays : stats->leftRays);
-          t.tPrev = Exit(t);
+          t.tPrev = exit;
           ++t.hop;
           Send(t);
         }
@@ -327,15 +346,15 @@ struct BandTracer::Impl {
       out.clear();
       const std::uint32_t nf = std::uint32_t(fwdOut[std::size_t(r)].size()), na = std::uint32_t(ansOut[std::size_t(r)].size());
       if (nf + na == 0) continue;
-      Append(out, nf);
-      Append(out, na);
-      for (const Travel& t : fwdOut[std::size_t(r)]) Append(out, t);
-      for (const Answer& a : ansOut[std::size_t(r)]) Append(out, a);
+      Append(out, &nf, 1);
+      Append(out, &na, 1);
+      Append(out, fwdOut[std::size_t(r)].data(), nf);
+      Append(out, ansOut[std::size_t(r)].data(), na);
       fwdOut[std::size_t(r)].clear();
       ansOut[std::size_t(r)].clear();
     }
-    const std::vector<std::vector<char>> in = mpi::Exchange(outbox);
-    for (const std::vector<char>& msg : in) {
+    mpi::Exchange(outbox, inbox);
+    for (const std::vector<char>& msg : inbox) {
       if (msg.empty()) continue;
       std::uint32_t nf = 0, na = 0;
       std::memcpy(&nf, msg.data(), 4);
@@ -343,12 +362,12 @@ struct BandTracer::Impl {
       if (msg.size() != 8 + std::size_t(nf) * sizeof(Travel) + std::size_t(na) * sizeof(Answer))
         throw RuntimeError(fmt::format("bands-data: a message of {} bytes does not hold {} rays and {} answers", msg.size(), nf, na));
       const char* p = msg.data() + 8;
-      for (std::uint32_t i = 0; i < nf; ++i, p += sizeof(Travel)) {
-        Travel t;
-        std::memcpy(&t, p, sizeof t);
-        queue.push_back(t);
-        if (int(t.origin) != rank) ++stats->received;
-      }
+      const std::size_t q0 = queue.size();
+      queue.resize(q0 + nf);
+      if (nf) std::memcpy(queue.data() + q0, p, std::size_t(nf) * sizeof(Travel));
+      p += std::size_t(nf) * sizeof(Travel);
+      for (std::size_t i = q0; i < queue.size(); ++i)
+        if (int(queue[i].origin) != rank) ++stats->received;
       for (std::uint32_t i = 0; i < na; ++i, p += sizeof(Answer)) {
         Answer a;
         std::memcpy(&a, p, sizeof a);

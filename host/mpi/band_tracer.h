@@ -45,12 +45,17 @@ namespace cr {
 struct BandWedges {
   glm::dvec3 eye{0.0}, forward{0.0, 0.0, -1.0}, up{0.0, 1.0, 0.0};
   std::vector<double> upper;
+  std::vector<glm::dvec2> unit;  // (cos, sin) of each upper angle
   int Count() const { return int(upper.size()) - 1; }
   // Wedges of `n` bands of a width x height image, band r holding rows
   // [h r / n, h (r + 1) / n) (the bands of --distribute bands).
   static BandWedges ForRows(const CameraFrame& frame, int n);
   glm::dvec2 Project(const glm::dvec3& p) const;  // (along forward, along up) from the eye
   int WedgeOf(double angle) const;
+  // The wedge of a projected point q != 0 (the same as WedgeOf its angle,
+  // by cross products instead of atan2; the inner boundaries lie in front of
+  // the eye, within a quarter turn of forward).
+  int WedgeOfPoint(const glm::dvec2& q) const;
   // Whether the wedges of a box (its padded projection) include wedge r.
   std::vector<bool> WedgesOfBox(const Bounds& box) const;
   // The run of wedges a ray crosses over [tmin, tmax]: the first, the

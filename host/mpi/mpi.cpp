@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <thread>
 
 #include <fmt/format.h>
@@ -243,35 +244,41 @@ void SumAll(std::uint64_t* v, int n)
 #endif
 }
 
-std::vector<std::vector<char>> Exchange(const std::vector<std::vector<char>>& out)
+void Exchange(const std::vector<std::vector<char>>& out, std::vector<std::vector<char>>& in)
 {
+  in.resize(out.size());
 #ifdef CELLRAY_HAVE_MPI
   if (Distributed()) {
     const std::size_t n = std::size_t(gSize);
+    static thread_local std::vector<char> send, recv;
     std::vector<int> sendCount(n), recvCount(n), sendAt(n), recvAt(n);
-    std::vector<char> send;
+    std::size_t total = 0;
+    for (std::size_t r = 0; r < n; ++r) total += out[r].size();
+    if (total > (std::size_t(1) << 31) - 1)
+      throw RuntimeError(fmt::format("MPI: one exchange of {} bytes is over 2 GiB", total));
+    send.resize(total);
+    total = 0;
     for (std::size_t r = 0; r < n; ++r) {
-      if (out[r].size() > std::size_t(1) << 30)
-        throw RuntimeError(fmt::format("MPI: a message of {} bytes to rank {} is over 1 GiB", out[r].size(), r));
-      sendAt[r] = int(send.size());
+      sendAt[r] = int(total);
       sendCount[r] = int(out[r].size());
-      send.insert(send.end(), out[r].begin(), out[r].end());
+      if (!out[r].empty()) std::memcpy(send.data() + total, out[r].data(), out[r].size());
+      total += out[r].size();
       if (!out[r].empty() && int(r) != gRank) ++gMessages, gBytes += out[r].size();
     }
     Check(MPI_Alltoall(sendCount.data(), 1, MPI_INT, recvCount.data(), 1, MPI_INT, MPI_COMM_WORLD), "MPI_Alltoall");
-    std::size_t total = 0;
+    total = 0;
     for (std::size_t r = 0; r < n; ++r) recvAt[r] = int(total), total += std::size_t(recvCount[r]);
-    std::vector<char> recv(total);
+    if (total > (std::size_t(1) << 31) - 1)
+      throw RuntimeError(fmt::format("MPI: one exchange of {} bytes is over 2 GiB", total));
+    recv.resize(total);
     Check(MPI_Alltoallv(send.data(), sendCount.data(), sendAt.data(), MPI_BYTE, recv.data(), recvCount.data(),
                         recvAt.data(), MPI_BYTE, MPI_COMM_WORLD),
           "MPI_Alltoallv");
-    std::vector<std::vector<char>> in(n);
-    for (std::size_t r = 0; r < n; ++r)
-      in[r].assign(recv.begin() + recvAt[r], recv.begin() + recvAt[r] + recvCount[r]);
-    return in;
+    for (std::size_t r = 0; r < n; ++r) in[r].assign(recv.begin() + recvAt[r], recv.begin() + recvAt[r] + recvCount[r]);
+    return;
   }
 #endif
-  return out;
+  for (std::size_t r = 0; r < out.size(); ++r) in[r] = out[r];
 }
 
 std::uint64_t MessagesSent() { return gMessages; }

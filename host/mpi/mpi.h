@@ -69,9 +69,10 @@ std::uint64_t SumAll(std::uint64_t v);
 // Element-wise sums over ranks of n counters, in place on every rank.
 void SumAll(std::uint64_t* v, int n);
 // Personalised all-to-all: out[r] goes to rank r (out has Size() entries;
-// an empty one sends nothing); returns what each rank sent here, by rank.
-// One process: returns out.
-std::vector<std::vector<char>> Exchange(const std::vector<std::vector<char>>& out);
+// an empty one sends nothing); in[r] gets what rank r sent here. The
+// buffers are reused from call to call (no fresh pages per round). One
+// process: in = out.
+void Exchange(const std::vector<std::vector<char>>& out, std::vector<std::vector<char>>& in);
 // Messages and bytes this rank has sent through these collectives.
 std::uint64_t MessagesSent();
 std::uint64_t BytesSent();
