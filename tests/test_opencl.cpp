@@ -437,6 +437,41 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
   }
 }
 
+TEST_CASE("opencl: --device with two devices shares each batch and answers as one device" * doctest::skip(NoOpenCL()))
+{
+  // The machine's first device named twice: two contexts, the path that
+  // --device all takes on a machine with two devices.
+  auto cache = TestCacheDir();
+  const Scene& scene = test::CachedScene(test::SpdPath("gears"));
+  const auto rays = test::MakeRays(scene, RayKind::Diffuse, 300);  // 90,000 rays: several slices
+  TraceConfig one;
+  one.backend = Backend::OpenCL;
+  one.device = "0";
+  one.stats = true;
+  TraceConfig two = one;
+  two.device = "0,0";
+  for (bool occlusion : {false, true}) {
+    std::vector<HitRecord> a, b;
+    TraceStatsSum sa, sb;
+    CreateTracer(scene, one)->Trace(rays, a, occlusion, &sa);
+    auto t = CreateTracer(scene, two);
+    t->Trace(rays, b, occlusion, &sb);
+    INFO("occlusion ", occlusion);
+    CHECK(Compare(b, a, occlusion).differ == 0);
+    CHECK(sb.rays == sa.rays);
+    CHECK(sb.nIT == sa.nIT);
+    nlohmann::json j;
+    t->Describe(j);
+    REQUIRE(j["devices"].size() == 2);
+    int slices = 0;
+    for (const auto& d : j["devices"]) slices += d["slices"].get<int>();
+    CHECK(slices == 4 * 2);  // four slices per device per batch, taken as the devices come free
+  }
+  TraceConfig bad = one;
+  bad.device = "0,,0";
+  CHECK_THROWS_AS(CreateTracer(scene, bad), InputError);
+}
+
 TEST_CASE("opencl: a scene without primitives misses everywhere, every structure, packets" *
           doctest::skip(NoOpenCL()))
 {
