@@ -1,5 +1,6 @@
 #include "simd/ray_coherence.h"
 
+#include <span>
 #include <cmath>
 
 namespace cr::simd {
@@ -18,7 +19,7 @@ bool Unit(const float d[3], double u[3])
 
 }  // namespace
 
-CoherenceSample SampleCoherence(const std::vector<RayRecord>& rays, int width, std::size_t maxGroups, double cosLimit)
+CoherenceSample SampleCoherence(std::span<const RayRecord> rays, int width, std::size_t maxGroups, double cosLimit)
 {
   CoherenceSample s;
   const std::size_t nGroups = rays.size() / std::size_t(width);

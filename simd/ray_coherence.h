@@ -2,6 +2,7 @@
 // enough for packets? (The `auto` variant of the SIMD backend.)
 #pragma once
 
+#include <span>
 #include <cstddef>
 #include <vector>
 
@@ -19,7 +20,7 @@ struct CoherenceSample {
 // the set. A group is coherent when every direction is within `cosLimit` (the
 // cosine of that half angle) of the group's first direction and shares
 // its octant, which is what lets a packet's lanes take the same BVH path.
-CoherenceSample SampleCoherence(const std::vector<RayRecord>& rays, int width, std::size_t maxGroups = 512,
+CoherenceSample SampleCoherence(std::span<const RayRecord> rays, int width, std::size_t maxGroups = 512,
                                 double cosLimit = 0.99);
 
 }  // namespace cr::simd

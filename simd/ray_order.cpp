@@ -1,5 +1,6 @@
 #include "simd/ray_order.h"
 
+#include <span>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -22,7 +23,7 @@ double StepError(const RayRecord& a, const RayRecord& b, const double step[3], d
 
 }  // namespace
 
-int DetectImageWidth(const std::vector<RayRecord>& rays)
+int DetectImageWidth(std::span<const RayRecord> rays)
 {
   const std::size_t n = rays.size();
   if (n < 16) return 0;
@@ -68,7 +69,7 @@ std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tile
   return order;
 }
 
-std::vector<std::uint32_t> DirectionClassOrder(const std::vector<RayRecord>& rays)
+std::vector<std::uint32_t> DirectionClassOrder(std::span<const RayRecord> rays)
 {
   constexpr int kClasses = 24;
   const std::size_t n = rays.size();

@@ -4,6 +4,7 @@
 // ray's own index, so an order changes speed only, never answers.
 #pragma once
 
+#include <span>
 #include <cstdint>
 #include <vector>
 
@@ -15,7 +16,7 @@ namespace cr::simd {
 // the same origin and the directions step by one constant vector along
 // rows of W rays (host/scene/camera.cpp PrimaryRay, row-major). 0 when the
 // set does not look like that.
-int DetectImageWidth(const std::vector<RayRecord>& rays);
+int DetectImageWidth(std::span<const RayRecord> rays);
 
 // Positions of the rays of a W-wide row-major image in tiles of tileW x tileH
 // pixels (tileW * tileH = the packet width), tiles row by row: a packet
@@ -28,6 +29,6 @@ std::vector<std::uint32_t> TileOrder(std::size_t nRays, int imageWidth, int tile
 // of direction signs among their lanes (simd_kernels.h PacketOrder), so on
 // incoherent sets (shadow rays towards several lights, diffuse and random
 // rays) this turns passes of one or two lanes into passes of full packets.
-std::vector<std::uint32_t> DirectionClassOrder(const std::vector<RayRecord>& rays);
+std::vector<std::uint32_t> DirectionClassOrder(std::span<const RayRecord> rays);
 
 }  // namespace cr::simd

@@ -156,7 +156,7 @@ class SimdTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());
@@ -251,7 +251,7 @@ class SimdTracer final : public Tracer {
   // themselves (in image tiles when imageWidth > 0, KernelJob), parallel over
   // blocks of whole packets: small enough to balance the threads, large
   // enough to amortise the scheduling. times: per ray, or null (KernelJob).
-  void Run(KernelFn fn, bool packet, const std::vector<RayRecord>& rays, const float* times,
+  void Run(KernelFn fn, bool packet, RaySpan rays, const float* times,
            std::vector<HitRecord>& hits, const std::vector<std::uint32_t>& order, std::uint32_t imageWidth,
            bool occlusion, TraceStatsSum* sum) const
   {
@@ -291,7 +291,7 @@ class SimdTracer final : public Tracer {
   // part inside the grid box spans at least kLongWalkCells cells on average
   // (a sample of the set; planes crossed plus one), else input order.
   static constexpr double kLongWalkCells = 8.0;
-  bool GridClassOrderPays(const std::vector<RayRecord>& rays) const
+  bool GridClassOrderPays(RaySpan rays) const
   {
     const GridHeader& g = data_.grid.header;
     const std::size_t n = rays.size(), step = std::max<std::size_t>(1, n / 2048);
@@ -330,7 +330,7 @@ class SimdTracer final : public Tracer {
   // variant wins depends on the scene as much as on the rays (docs/SIMD.md:
   // on random rays packets win on balls and tree, single rays on gears and
   // teapot), so no ray-set statistic predicts it as well.
-  bool Pilot(const std::vector<RayRecord>& rays, const float* times, std::vector<HitRecord>& hits, bool occlusion,
+  bool Pilot(RaySpan rays, const float* times, std::vector<HitRecord>& hits, bool occlusion,
              TraceStatsSum* sum, const std::vector<std::uint32_t>& seq, std::vector<std::uint32_t>& rest) const
   {
     // seq: the positions in the order to trace them (the rays themselves when empty).
@@ -385,7 +385,7 @@ class DelegatingTracer final : public Tracer {
     info_ = inner_->Info();
   }
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     inner_->Trace(rays, times, hits, occlusion, stats);

@@ -69,7 +69,7 @@ class EmbreeTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());
@@ -110,7 +110,7 @@ class EmbreeTracer final : public Tracer {
   mutable std::atomic<std::uint64_t> occluderLookups_{0};
 
   // Ray i's time in the shutter interval (0 without times).
-  static float TimeOf(const std::vector<float>& times, std::size_t i) { return times.empty() ? 0.0f : times[i]; }
+  static float TimeOf(TimeSpan times, std::size_t i) { return times.empty() ? 0.0f : times[i]; }
 
   static void SetRay(RTCRay& r, const RayRecord& rec, float time)
   {
@@ -198,7 +198,7 @@ class EmbreeTracer final : public Tracer {
     return RecordOfUnified(occluder, 0.0f, 0.0f, 0.0f, true);
   }
 
-  void TracePacket(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void TracePacket(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
                    std::size_t first, bool occlusion) const
   {
     const std::size_t n = std::min(kPacket, rays.size() - first);

@@ -37,7 +37,7 @@ BandPlanTracer::BandPlanTracer(const Scene& scene, std::unique_ptr<Tracer> inner
   }
 }
 
-void BandPlanTracer::Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times,
+void BandPlanTracer::Trace(RaySpan rays, TimeSpan times,
                            std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
 {
   inner_->Trace(rays, times, hits, occlusion, stats);

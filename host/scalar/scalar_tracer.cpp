@@ -34,7 +34,7 @@ class ScalarTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());

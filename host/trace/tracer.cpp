@@ -120,7 +120,7 @@ class ReferenceBackend final : public Tracer {
     info_.params = "fp64 median-split bvh";
   }
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());
@@ -173,7 +173,7 @@ class FallbackTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     // Counters of a failed OpenCL call are not added: stats->Add happens

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,12 @@
 #include "host/scene/scene.h"
 
 namespace cr {
+
+// The rays of a trace call, and their times (empty: every ray at time 0):
+// views, so that a caller's buffer (a numpy array, a mapped file) is traced
+// in place.
+using RaySpan = std::span<const RayRecord>;
+using TimeSpan = std::span<const float>;
 
 // Embree: Intel's Embree 3 as a baseline (host/embree/), present only when
 // the build found it (CELLRAY_HAVE_EMBREE; EmbreeAvailable()).
@@ -63,9 +70,9 @@ class Tracer {
   // time times[i] in the shutter interval [0, 1] (motion blur; `times` empty:
   // every ray at time 0, as a CRRAYS01 file's rays are). stats is filled
   // only when the tracer was created with stats on.
-  virtual void Trace(const std::vector<RayRecord>& rays, const std::vector<float>& times, std::vector<HitRecord>& hits,
+  virtual void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
                      bool occlusion, TraceStatsSum* stats) = 0;
-  void Trace(const std::vector<RayRecord>& rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
+  void Trace(RaySpan rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
   {
     Trace(rays, NoTimes(), hits, occlusion, stats);
   }
