@@ -5,5 +5,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 preset="${1:-release}"
 bash scripts/install-deps.sh
-cmake --preset "$preset" >/dev/null
+# The Python API (python/) builds where its environment is: the presets that
+# build it find nanobind through .venv's Python.
+py=()
+if [ "$preset" != asan ] && [ "$preset" != fuzz ]; then
+  bash scripts/python-env.sh
+  py=(-DPython_EXECUTABLE="$PWD/.venv/bin/python")
+fi
+cmake --preset "$preset" "${py[@]}" >/dev/null
 cmake --build --preset "$preset" -j "$(nproc)"

@@ -12,6 +12,7 @@ pkgs=(
   libembree-dev python3-matplotlib oclgrind
   clang libclang-rt-14-dev llvm clang-15 libclc-15
   libopenmpi-dev openmpi-bin
+  python3-dev python3-venv
 )
 
 missing=()

@@ -1,0 +1,583 @@
+// cellray._cellray: the Python API's native part (nanobind). The package
+// python/cellray/__init__.py checks arguments and documents the API
+// (docs/PYTHON.md); this file binds the C++ core:
+//  - Scene: LoadScene, or triangles and spheres from arrays; counts, bounds,
+//    camera, lights; rays (GenerateRays, as `cellray rays`); render.
+//  - Tracer: any backend x structure x precision; Trace on the caller's
+//    (N, 8) float32 array in place (RaySpan), the GIL released; hits in the
+//    .hits record form (FORMATS.md) exposed as numpy views of the buffer
+//    they were written to; normals on demand (SurfaceAt).
+//  - check: the fp64 reference's verdicts (host/reference/check.h).
+// Errors: InputError -> ValueError, RuntimeError (OpenCL names included) ->
+// RuntimeError.
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/pair.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "host/core/error.h"
+#include "host/io/rays_io.h"
+#include "host/rays/raygen.h"
+#include "host/reference/check.h"
+#include "host/reference/reference.h"
+#include "host/render/image_io.h"
+#include "host/render/renderer.h"
+#include "host/scene/area_light.h"
+#include "host/scene/camera.h"
+#include "host/scene/surface.h"
+#include "host/trace/tracer.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace cr;
+
+namespace {
+
+using RayArray = nb::ndarray<const float, nb::shape<-1, 8>, nb::c_contig, nb::device::cpu>;
+using TimeArray = nb::ndarray<const float, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+
+// A numpy array that owns a vector's buffer (moved in, never copied).
+template <class T, class V>
+nb::ndarray<nb::numpy, T> Own(std::vector<V>&& v, std::initializer_list<std::size_t> shape)
+{
+  auto* heap = new std::vector<V>(std::move(v));
+  nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<V>*>(p); });
+  return nb::ndarray<nb::numpy, T>(reinterpret_cast<T*>(heap->data()), shape, owner);
+}
+
+RaySpan Rays(const RayArray& a) { return {reinterpret_cast<const RayRecord*>(a.data()), a.shape(0)}; }
+
+struct PyScene {
+  std::shared_ptr<Scene> scene;
+};
+
+// One trace's answers: the .hits records (file form) and the renderer's
+// form (unified piece, barycentrics) that normals are computed from.
+struct PyHits {
+  std::shared_ptr<const Scene> scene;
+  std::vector<HitRecord> records;  // FORMATS.md form
+  std::vector<HitRecord> unified;  // piece index and barycentrics (for normals)
+  // The caller's arrays (referenced, not copied): hit points for normals.
+  std::optional<RayArray> rays;
+  std::optional<TimeArray> times;
+  bool occlusion = false;
+  std::optional<std::vector<float>> normals;  // (N, 3), computed on first use
+};
+
+struct PyTracer {
+  std::shared_ptr<const Scene> scene;
+  std::unique_ptr<Tracer> tracer;
+  std::unique_ptr<tbb::task_arena> arena;
+  TraceConfig config;
+  TraceStatsSum stats;
+  const void* lastInput = nullptr;  // where the last call read its rays (tests check it is the caller's array)
+
+  template <class F>
+  void Run(F&& f)
+  {
+    if (arena) arena->execute(f);
+    else f();
+  }
+};
+
+// The .hits record of a renderer-form hit (Hit_ToRecord's two forms, kernels/intersect.h).
+HitRecord FileForm(const Scene& scene, const PrimRanges& ranges, const HitRecord& h, bool occlusion)
+{
+  if (h.prim == CR_NO_HIT) return h;
+  HitRecord r{occlusion ? 0.0f : h.t, scene.IdOfHit(h.prim, double(h.u)), 0.0f, 0.0f};
+  if (!occlusion && Prim_Is(&ranges, CR_PRIM_TRIANGLE, h.prim) &&
+      (scene.triangles[Prim_Local(&ranges, CR_PRIM_TRIANGLE, h.prim)].flags & CR_TRI_REPORT_UV)) {
+    r.u = h.u;
+    r.v = h.v;
+  }
+  return r;
+}
+
+PyHits Trace(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, bool occlusion)
+{
+  PyHits out;
+  out.scene = t.scene;
+  out.occlusion = occlusion;
+  const RaySpan span = Rays(rays);
+  TimeSpan tspan;
+  if (times) tspan = TimeSpan(times->data(), times->shape(0));
+  t.lastInput = span.data();
+  {
+    nb::gil_scoped_release release;
+    t.Run([&] { t.tracer->Trace(span, tspan, out.unified, occlusion, t.config.stats ? &t.stats : nullptr); });
+    const PrimRanges ranges = t.scene->Ranges();
+    out.records.resize(out.unified.size());
+    t.Run([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.unified.size(), 65536), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+          out.records[i] = FileForm(*t.scene, ranges, out.unified[i], occlusion);
+      });
+    });
+  }
+  out.rays = rays;
+  out.times = times;
+  return out;
+}
+
+// A view of one 4-byte field of every record.
+template <class T>
+nb::ndarray<nb::numpy, T, nb::ndim<1>> Field(nb::handle self, const std::vector<HitRecord>& recs, std::size_t offset)
+{
+  const std::size_t n = recs.size();
+  const int64_t stride = int64_t(sizeof(HitRecord) / sizeof(float));
+  const char* base = reinterpret_cast<const char*>(recs.data()) + offset;
+  return nb::ndarray<nb::numpy, T, nb::ndim<1>>(reinterpret_cast<T*>(const_cast<char*>(base)), 1, &n, self, &stride);
+}
+
+AccelParams ParamsFrom(const nb::dict& d)
+{
+  AccelParams p;
+  for (auto [k, v] : d) {
+    const std::string key = nb::cast<std::string>(k);
+    bool known = false;
+    // CR_ACCEL_PARAMS field names in snake case: gridDensity -> grid_density.
+#define CR_PY_PARAM(f, T, opt, help)                                        \
+  {                                                                         \
+    std::string snake;                                                      \
+    for (char c : std::string(#f)) {                                        \
+      if (c >= 'A' && c <= 'Z') snake += '_', snake += char(c - 'A' + 'a'); \
+      else snake += c;                                                      \
+    }                                                                       \
+    if (key == snake) {                                                     \
+      p.f = nb::cast<T>(v);                                                 \
+      known = true;                                                         \
+    }                                                                       \
+  }
+    CR_ACCEL_PARAMS(CR_PY_PARAM)
+#undef CR_PY_PARAM
+    if (!known)
+      throw nb::type_error(("tracer() got an unexpected keyword argument '" + key +
+                            "' (structure parameters: grid_density, octree_leaf, octree_depth, octree_build, bvh_leaf, "
+                            "bvh_quality, hgrid_top_density, hgrid_density, hgrid_leaf)")
+                               .c_str());
+  }
+  return p;
+}
+
+nb::dict CheckDict(const ref::CheckResult& c)
+{
+  nb::dict d;
+  d["rays"] = c.rays;
+  d["agree"] = c.agree;
+  d["ties"] = c.ties;
+  d["flips"] = c.flips;
+  d["wrong"] = c.wrong;
+  d["wrong_missed"] = c.wrongMissed;
+  d["wrong_farther"] = c.wrongFarther;
+  d["wrong_not_on_prim"] = c.wrongNotOnPrim;
+  d["max_rel_t_error"] = c.maxRelTErr;
+  d["mean_rel_t_error"] = c.meanRelTErr;
+  d["first_wrong"] = c.firstWrong;
+  d["first_wrong_why"] = c.firstWrongWhy;
+  return d;
+}
+
+}  // namespace
+
+NB_MODULE(_cellray, m)
+{
+  m.doc() = "cellray's native module (use the cellray package)";
+  nb::register_exception_translator([](const std::exception_ptr& p, void*) {
+    try {
+      std::rethrow_exception(p);
+    } catch (const InputError& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const RuntimeError& e) {
+      PyErr_SetString(PyExc_RuntimeError, e.what());
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(PyExc_MemoryError, "cellray: out of memory");
+    }
+  });
+
+  nb::class_<PyScene>(m, "Scene")
+      .def_static("load", [](const std::string& path) { return PyScene{std::make_shared<Scene>(LoadScene(path))}; })
+      .def_static(
+          "from_arrays",
+          [](nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu> v,
+             nb::ndarray<const std::int64_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu> tri,
+             nb::ndarray<const double, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu> sph) {
+            auto s = std::make_shared<Scene>();
+            s->path = "<arrays>";
+            s->materials.push_back(Material{});
+            const std::size_t nv = v.shape(0);
+            for (std::size_t i = 0; i < tri.shape(0); ++i) {
+              std::vector<glm::dvec3> verts;
+              for (int k = 0; k < 3; ++k) {
+                const std::int64_t j = tri(i, k);
+                if (j < 0 || std::size_t(j) >= nv)
+                  throw InputError(fmt::format("triangles[{}]: vertex index {} is not in 0..{}", i, j, nv - 1));
+                verts.emplace_back(v(std::size_t(j), 0), v(std::size_t(j), 1), v(std::size_t(j), 2));
+              }
+              AddPolygon(*s, PrimKind::kFace, verts, nullptr, 0, std::uint32_t(i + 1), s->path, false);
+            }
+            for (std::size_t i = 0; i < sph.shape(0); ++i) {
+              PrimInfo info;
+              info.type = CR_PRIM_SPHERE;
+              info.line = std::uint32_t(i + 1);
+              if (sph(i, 3) > 0.0) {
+                info.nPieces = 1;
+                info.firstPiece = s->AddPiece(
+                    Sphere{{float(sph(i, 0)), float(sph(i, 1)), float(sph(i, 2))}, float(sph(i, 3))}, s->NumPrims());
+              }
+              s->prims.push_back(info);
+            }
+            return PyScene{s};
+          },
+          "vertices"_a, "triangles"_a, "spheres"_a)
+      .def("_set_camera",
+           [](PyScene& s, std::vector<double> eye, std::vector<double> at, std::vector<double> up, double fov, int w,
+              int h) {
+             Camera& c = s.scene->camera;
+             c.from = glm::vec3(float(eye[0]), float(eye[1]), float(eye[2]));
+             c.at = glm::vec3(float(at[0]), float(at[1]), float(at[2]));
+             c.up = glm::vec3(float(up[0]), float(up[1]), float(up[2]));
+             c.angle = float(fov);
+             c.width = w;
+             c.height = h;
+             s.scene->hasCamera = true;
+           })
+      .def("_add_light",
+           [](PyScene& s, std::vector<double> p, std::vector<double> c) {
+             s.scene->lights.push_back(Light{glm::vec3(float(p[0]), float(p[1]), float(p[2])),
+                                             glm::vec3(float(c[0]), float(c[1]), float(c[2]))});
+           })
+      .def_prop_ro("path", [](const PyScene& s) { return s.scene->path; })
+      .def_prop_ro("num_prims", [](const PyScene& s) { return s.scene->NumPrims(); })
+      .def_prop_ro("num_pieces", [](const PyScene& s) { return s.scene->NumUnified(); })
+      .def_prop_ro("has_motion", [](const PyScene& s) { return s.scene->hasMotion; })
+      .def_prop_ro("counts",
+                   [](const PyScene& s) {
+                     nb::dict d;
+                     s.scene->ForEachType([&](const auto& a, std::uint32_t k) {
+                       static const char* names[] = {"spheres", "triangles", "cones", "boxes",
+                                                     "quadrics", "polyhedra", "sdfs", "csgs"};
+                       d[names[k]] = a.size();
+                     });
+                     return d;
+                   })
+      .def_prop_ro("bounds",
+                   [](const PyScene& s) {
+                     const Bounds b = s.scene->WorldBounds();
+                     return std::make_pair(std::vector<float>{b.lo.x, b.lo.y, b.lo.z},
+                                           std::vector<float>{b.hi.x, b.hi.y, b.hi.z});
+                   })
+      .def_prop_ro("camera",
+                   [](const PyScene& s) {
+                     const Camera& c = s.scene->camera;
+                     nb::dict d;
+                     d["eye"] = std::vector<float>{c.from.x, c.from.y, c.from.z};
+                     d["at"] = std::vector<float>{c.at.x, c.at.y, c.at.z};
+                     d["up"] = std::vector<float>{c.up.x, c.up.y, c.up.z};
+                     d["fov"] = c.angle;
+                     d["width"] = c.width;
+                     d["height"] = c.height;
+                     d["aperture"] = c.aperture;
+                     d["focal_distance"] = c.focal;
+                     return d;
+                   })
+      .def_prop_ro("lights",
+                   [](const PyScene& s) {
+                     nb::list l;
+                     for (const Light& li : s.scene->lights) {
+                       nb::dict d;
+                       d["position"] = std::vector<float>{li.position.x, li.position.y, li.position.z};
+                       d["color"] = std::vector<float>{li.color.x, li.color.y, li.color.z};
+                       l.append(d);
+                     }
+                     return l;
+                   })
+      .def(
+          "_rays",
+          [](const PyScene& s, const std::string& kind, int width, int height, bool spd, std::uint64_t seed,
+             std::uint64_t count) {
+            RayGenOptions g;
+            g.kind = ParseRayKind(kind);
+            g.width = width;
+            g.height = height;
+            g.spdCorners = spd;
+            g.seed = seed;
+            g.count = count;
+            std::vector<float> times;
+            std::vector<RayRecord> rays;
+            {
+              nb::gil_scoped_release release;
+              ref::ReferenceTracer ref(*s.scene);
+              rays = GenerateRays(*s.scene, ref, g, &times);
+            }
+            const std::size_t n = rays.size();
+            if (times.empty()) times.assign(n, 0.0f);
+            return std::make_pair(Own<float>(std::move(rays), {n, 8}), Own<float>(std::move(times), {n}));
+          },
+          "kind"_a, "width"_a, "height"_a, "spd_corners"_a, "seed"_a, "count"_a)
+      .def(
+          "_render",
+          [](const PyScene& s, const std::string& accel, const std::string& backend, const std::string& precision,
+             int threads, int width, int height, int spp, const std::string& integrator, int depth, bool spd,
+             std::uint64_t seed, const std::string& diffuse, double areaLights, bool fresnel, const std::string& sides) {
+            std::shared_ptr<Scene> scene = s.scene;
+            if (areaLights > 0.0) {
+              scene = std::make_shared<Scene>(*s.scene);
+              PointLightsToSpheres(*scene, areaLights);
+            }
+            TraceConfig cfg;
+            cfg.accel = ParseAccelKind(accel);
+            cfg.backend = ParseBackend(backend);
+            cfg.precision = ParsePrecision(precision);
+            cfg.threads = threads;
+            cfg.unifiedHits = true;
+            RenderOptions ro;
+            ro.width = width;
+            ro.height = height;
+            ro.spp = spp;
+            if (integrator == "whitted") ro.integrator = Integrator::Whitted;
+            else if (integrator == "path") ro.integrator = Integrator::Path;
+            else throw InputError(fmt::format("integrator '{}': expected whitted or path", integrator));
+            ro.maxDepth = depth > 0 ? depth : ro.integrator == Integrator::Path ? 8 : 5;
+            ro.spd = spd;
+            ro.seed = seed;
+            ro.fresnel = fresnel;
+            if (!diffuse.empty()) ro.diffuse = ParseDiffuse(diffuse);
+            if (sides == "auto") ro.sides = Sides::Auto;
+            else if (sides == "one") ro.sides = Sides::One;
+            else if (sides == "two") ro.sides = Sides::Two;
+            else throw InputError(fmt::format("sides '{}': expected auto, one or two", sides));
+            ro.robustOffsets = cfg.backend != Backend::Embree && cfg.precision != Precision::Fast;
+            Image img;
+            {
+              nb::gil_scoped_release release;
+              std::unique_ptr<tbb::task_arena> arena;
+              if (threads > 0) arena = std::make_unique<tbb::task_arena>(threads);
+              auto run = [&] {
+                auto tracer = CreateTracer(*scene, cfg);
+                img = Render(*scene, *tracer, ro, nullptr);
+              };
+              if (arena) arena->execute(run);
+              else run();
+            }
+            const std::size_t w = std::size_t(img.width), h = std::size_t(img.height);
+            return Own<float>(std::move(img.rgb), {h, w, 3});
+          },
+          "accel"_a, "backend"_a, "precision"_a, "threads"_a, "width"_a, "height"_a, "spp"_a, "integrator"_a,
+          "depth"_a, "spd"_a, "seed"_a, "diffuse"_a, "area_lights"_a, "fresnel"_a, "sides"_a);
+
+  nb::class_<PyTracer>(m, "Tracer")
+      .def(
+          "__init__",
+          [](PyTracer* t, const PyScene& s, const std::string& accel, const std::string& backend,
+             const std::string& precision, std::optional<std::string> device, int threads,
+             std::optional<std::string> variant, std::optional<std::string> isa, bool stats, const nb::dict& params) {
+            new (t) PyTracer();
+            t->scene = s.scene;
+            TraceConfig& c = t->config;
+            c.accel = ParseAccelKind(accel);
+            c.backend = backend == "auto" ? ResolveAutoBackend(device.value_or("")) : ParseBackend(backend);
+            c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
+            c.precision = ParsePrecision(precision);
+            c.threads = threads;
+            c.device = device.value_or("");
+            c.variant = variant.value_or("");
+            c.isa = isa.value_or("");
+            c.stats = stats;
+            c.unifiedHits = true;  // the records are converted to the file form; normals need the piece
+            c.params = ParamsFrom(params);
+            if (threads < 0) throw InputError(fmt::format("threads {} is negative", threads));
+            if (threads > 0) t->arena = std::make_unique<tbb::task_arena>(threads);
+            nb::gil_scoped_release release;
+            t->Run([&] { t->tracer = CreateTracer(*t->scene, c); });
+          },
+          "scene"_a, "accel"_a, "backend"_a, "precision"_a, "device"_a, "threads"_a, "variant"_a, "isa"_a, "stats"_a,
+          "params"_a)
+      .def("_trace",
+           [](PyTracer& t, RayArray rays, std::optional<TimeArray> times, bool occlusion) {
+             return Trace(t, rays, times, occlusion);
+           },
+           "rays"_a.noconvert(), "times"_a.noconvert().none(), "occlusion"_a)
+      .def("_occluded",
+           [](PyTracer& t, RayArray rays, std::optional<TimeArray> times) {
+             PyHits h = Trace(t, rays, times, true);
+             const std::size_t n = h.records.size();
+             auto* flags = new std::vector<std::uint8_t>(n);
+             for (std::size_t i = 0; i < n; ++i) (*flags)[i] = h.records[i].prim != CR_NO_HIT;
+             nb::capsule owner(flags, [](void* p) noexcept { delete static_cast<std::vector<std::uint8_t>*>(p); });
+             return nb::ndarray<nb::numpy, bool, nb::ndim<1>>(reinterpret_cast<bool*>(flags->data()), {n}, owner);
+           },
+           "rays"_a.noconvert(), "times"_a.noconvert().none())
+      .def_prop_ro("_last_input_address", [](const PyTracer& t) { return std::uintptr_t(t.lastInput); })
+      .def_prop_ro("backend", [](const PyTracer& t) { return std::string(BackendName(t.tracer->ActiveBackend())); })
+      .def_prop_ro("accel", [](const PyTracer& t) { return std::string(AccelKindName(t.config.accel)); })
+      .def_prop_ro("precision", [](const PyTracer& t) { return std::string(PrecisionName(t.config.precision)); })
+      .def_prop_ro("device", [](const PyTracer& t) { return t.tracer->DeviceName(); })
+      .def_prop_ro("variant", [](const PyTracer& t) { return t.tracer->VariantName(); })
+      .def("stats", [](const PyTracer& t) {
+        const AccelInfo& i = t.tracer->Info();
+        nb::dict d;
+        d["build_ms"] = i.buildMs;
+        d["bytes"] = i.bytes;
+        d["nodes"] = i.nodes;
+        d["leaves"] = i.leaves;
+        d["empty_leaves"] = i.emptyLeaves;
+        d["refs"] = i.refs;
+        d["params"] = i.params;
+        d["rays"] = t.stats.rays;
+        const double n = t.stats.rays ? double(t.stats.rays) : 1.0;
+        if (t.config.stats) {
+          d["intersection_tests"] = double(t.stats.nIT) / n;
+          d["traversal_steps"] = double(t.stats.nTS) / n;
+          d["leaves_visited"] = double(t.stats.nLeaves) / n;
+          d["empty_leaves_visited"] = double(t.stats.nEmptyLeaves) / n;
+        }
+        return d;
+      });
+
+  nb::class_<PyHits>(m, "Hits")
+      .def("__len__", [](const PyHits& h) { return h.records.size(); })
+      .def_prop_ro("occlusion", [](const PyHits& h) { return h.occlusion; })
+      .def_prop_ro("t", [](nb::handle self) {
+        const PyHits& h = nb::cast<const PyHits&>(self);
+        return Field<float>(self, h.records, offsetof(HitRecord, t));
+      }, nb::rv_policy::reference_internal)
+      .def_prop_ro("prim", [](nb::handle self) {
+        // CR_NO_HIT (0xFFFFFFFF) reads as -1.
+        const PyHits& h = nb::cast<const PyHits&>(self);
+        return Field<std::int32_t>(self, h.records, offsetof(HitRecord, prim));
+      }, nb::rv_policy::reference_internal)
+      .def_prop_ro("u", [](nb::handle self) {
+        const PyHits& h = nb::cast<const PyHits&>(self);
+        return Field<float>(self, h.records, offsetof(HitRecord, u));
+      }, nb::rv_policy::reference_internal)
+      .def_prop_ro("v", [](nb::handle self) {
+        const PyHits& h = nb::cast<const PyHits&>(self);
+        return Field<float>(self, h.records, offsetof(HitRecord, v));
+      }, nb::rv_policy::reference_internal)
+      .def_prop_ro("normal", [](nb::handle self) {
+        PyHits& h = nb::cast<PyHits&>(self);
+        const std::size_t n = h.records.size();
+        if (!h.normals) {
+          std::vector<float> out(n * 3, 0.0f);
+          const RaySpan rays = Rays(*h.rays);
+          {
+            nb::gil_scoped_release release;
+            tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+              const HitRecord& u = h.unified[i];
+              if (u.prim == CR_NO_HIT || h.occlusion) return;
+              const RayRecord& r = rays[i];
+              const glm::dvec3 p = glm::dvec3(r.org[0], r.org[1], r.org[2]) +
+                                   double(u.t) * glm::dvec3(r.dir[0], r.dir[1], r.dir[2]);
+              const double time = h.times ? double(h.times->data()[i]) : 0.0;
+              const SurfacePoint sp = SurfaceAt(*h.scene, u.prim, p, double(u.u), double(u.v), time);
+              for (int a = 0; a < 3; ++a) out[3 * i + std::size_t(a)] = sp.ng[a];
+            });
+          }
+          h.normals = std::move(out);
+        }
+        const std::size_t shape[2] = {n, 3};
+        return nb::ndarray<nb::numpy, float, nb::ndim<2>>(h.normals->data(), 2, shape, self);
+      }, nb::rv_policy::reference_internal)
+      .def("_records", [](nb::handle self) {
+        // The raw records, (N, 4) uint32: the .hits file's payload.
+        const PyHits& h = nb::cast<const PyHits&>(self);
+        const std::size_t shape[2] = {h.records.size(), 4};
+        return nb::ndarray<nb::numpy, std::uint32_t, nb::ndim<2>>(
+            reinterpret_cast<std::uint32_t*>(const_cast<HitRecord*>(h.records.data())), 2, shape, self);
+      }, nb::rv_policy::reference_internal);
+
+  m.def(
+      "_check",
+      [](const PyScene& s, RayArray rays, std::optional<TimeArray> times, nb::ndarray<const std::uint32_t, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu> recs,
+         bool occlusion) {
+        if (recs.shape(0) != rays.shape(0))
+          throw InputError(fmt::format("check: {} hits for {} rays", recs.shape(0), rays.shape(0)));
+        const RaySpan span = Rays(rays);
+        std::vector<RayRecord> rv(span.begin(), span.end());
+        std::vector<HitRecord> hv(recs.shape(0));
+        if (!hv.empty()) std::memcpy(hv.data(), recs.data(), hv.size() * sizeof(HitRecord));
+        std::vector<float> tv;
+        if (times) tv.assign(times->data(), times->data() + times->shape(0));
+        ref::CheckResult c;
+        {
+          nb::gil_scoped_release release;
+          ref::ReferenceTracer ref(*s.scene);
+          c = ref::CheckHits(ref, rv, hv, occlusion, tv);
+        }
+        return CheckDict(c);
+      },
+      "scene"_a, "rays"_a.noconvert(), "times"_a.noconvert().none(), "records"_a.noconvert(), "occlusion"_a);
+
+  m.def(
+      "_validate_rays",
+      [](RayArray rays) {
+        const RaySpan span = Rays(rays);
+        for (std::size_t i = 0; i < span.size(); ++i) {
+          const std::string why = ValidateRay(span[i]);
+          if (!why.empty()) throw InputError(fmt::format("rays[{}]: {}", i, why));
+        }
+      },
+      "rays"_a.noconvert());
+  m.def(
+      "_read_rays",
+      [](const std::string& path) {
+        std::vector<float> times;
+        std::vector<RayRecord> rays = ReadRays(path, &times);
+        const std::size_t n = rays.size();
+        if (times.empty()) times.assign(n, 0.0f);
+        return std::make_pair(Own<float>(std::move(rays), {n, 8}), Own<float>(std::move(times), {n}));
+      },
+      "path"_a);
+  m.def(
+      "_write_rays",
+      [](const std::string& path, RayArray rays, std::optional<TimeArray> times) {
+        const RaySpan span = Rays(rays);
+        std::vector<float> tv;
+        if (times) tv.assign(times->data(), times->data() + times->shape(0));
+        WriteRays(path, std::vector<RayRecord>(span.begin(), span.end()), tv);
+      },
+      "path"_a, "rays"_a.noconvert(), "times"_a.noconvert().none());
+  m.def(
+      "_read_image",
+      [](const std::string& path) {
+        int w = 0, h = 0;
+        std::vector<float> rgb = ReadImage(path, w, h);
+        return Own<float>(std::move(rgb), {std::size_t(h), std::size_t(w), 3});
+      },
+      "path"_a);
+  m.def(
+      "_write_image",
+      [](const std::string& path, nb::ndarray<const float, nb::shape<-1, -1, 3>, nb::c_contig, nb::device::cpu> img) {
+        std::vector<float> rgb(img.data(), img.data() + img.size());
+        WriteImage(path, int(img.shape(1)), int(img.shape(0)), rgb);
+      },
+      "path"_a, "image"_a.noconvert());
+  m.def(
+      "_read_hits",
+      [](const std::string& path) {
+        std::vector<HitRecord> h = ReadHits(path);
+        const std::size_t n = h.size();
+        return Own<std::uint32_t>(std::move(h), {n, 4});
+      },
+      "path"_a);
+  m.def(
+      "_write_hits",
+      [](const std::string& path, nb::ndarray<const std::uint32_t, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu> recs) {
+        std::vector<HitRecord> hv(recs.shape(0));
+        if (!hv.empty()) std::memcpy(hv.data(), recs.data(), hv.size() * sizeof(HitRecord));
+        WriteHits(path, hv);
+      },
+      "path"_a, "records"_a.noconvert());
+}
