@@ -185,9 +185,11 @@ class Tracer:
         return f"cellray.Tracer({self.accel}, {self.backend}, {self.precision})"
 
     def intersect(self, rays=None, *, origins=None, directions=None, tmin=0.0, tmax=_np.inf, times=None,
-                  occlusion=False) -> Hits:
+                  occlusion=False, out=None) -> Hits:
         """Closest hits (occlusion=True: any hit, t = 0 and a blocker's id) of an (N, 8) float32 ray array,
-        traced in place, or of origins and directions (N, 3). The GIL is released while tracing."""
+        traced in place, or of origins and directions (N, 3). The GIL is released while tracing.
+        out: a Hits of an earlier call with as many rays, written over and returned (no new memory: its
+        arrays, and views of them, then hold the new answers)."""
         if rays is None:
             if origins is None or directions is None:
                 raise TypeError("intersect: give rays (N, 8) or origins and directions (N, 3)")
@@ -195,6 +197,11 @@ class Tracer:
         elif origins is not None or directions is not None:
             raise TypeError("intersect: give rays or origins and directions, not both")
         rays = _ray_array(rays)
+        if out is not None:
+            if not isinstance(out, Hits):
+                raise TypeError(f"out: expected a cellray.Hits, got {type(out).__name__}")
+            self._t._trace_into(rays, _time_array(times, rays.shape[0]), bool(occlusion), out)
+            return out
         return self._t._trace(rays, _time_array(times, rays.shape[0]), bool(occlusion))
 
     def occluded(self, rays=None, *, origins=None, directions=None, tmin=0.0, tmax=_np.inf, times=None):

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,12 +26,14 @@
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include "host/core/error.h"
 #include "host/io/rays_io.h"
 #include "host/rays/raygen.h"
 #include "host/reference/check.h"
+#include "host/reference/geometry_d.h"
 #include "host/reference/reference.h"
 #include "host/render/image_io.h"
 #include "host/render/renderer.h"
@@ -63,12 +66,30 @@ struct PyScene {
   std::shared_ptr<Scene> scene;
 };
 
-// One trace's answers: the .hits records (file form) and the renderer's
-// form (unified piece, barycentrics) that normals are computed from.
+// The fp64 reference of a scene, built once, on the first call that needs
+// it (normals: the piece of a hit and its barycentrics or CSG side).
+const ref::ReferenceTracer& ReferenceOf(const std::shared_ptr<const Scene>& scene)
+{
+  static std::mutex m;
+  static std::vector<std::pair<std::weak_ptr<const Scene>, std::shared_ptr<ref::ReferenceTracer>>> cache;
+  std::lock_guard<std::mutex> lock(m);
+  for (auto it = cache.begin(); it != cache.end();) {
+    if (it->first.expired()) {
+      it = cache.erase(it);
+      continue;
+    }
+    if (it->first.lock() == scene) return *it->second;
+    ++it;
+  }
+  cache.emplace_back(scene, std::make_shared<ref::ReferenceTracer>(*scene));
+  return *cache.back().second;
+}
+
+// One trace's answers: the .hits records, as the CLI writes them (the tracer
+// writes them there: no conversion).
 struct PyHits {
   std::shared_ptr<const Scene> scene;
   std::vector<HitRecord> records;  // FORMATS.md form
-  std::vector<HitRecord> unified;  // piece index and barycentrics (for normals)
   // The caller's arrays (referenced, not copied): hit points for normals.
   std::optional<RayArray> rays;
   std::optional<TimeArray> times;
@@ -92,23 +113,12 @@ struct PyTracer {
   }
 };
 
-// The .hits record of a renderer-form hit (Hit_ToRecord's two forms, kernels/intersect.h).
-HitRecord FileForm(const Scene& scene, const PrimRanges& ranges, const HitRecord& h, bool occlusion)
+// Into `out` (a fresh PyHits, or one of the same size to reuse: no new
+// pages, as the CLI's repeats reuse theirs).
+void TraceInto(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, bool occlusion, PyHits& out)
 {
-  if (h.prim == CR_NO_HIT) return h;
-  HitRecord r{occlusion ? 0.0f : h.t, scene.IdOfHit(h.prim, double(h.u)), 0.0f, 0.0f};
-  if (!occlusion && Prim_Is(&ranges, CR_PRIM_TRIANGLE, h.prim) &&
-      (scene.triangles[Prim_Local(&ranges, CR_PRIM_TRIANGLE, h.prim)].flags & CR_TRI_REPORT_UV)) {
-    r.u = h.u;
-    r.v = h.v;
-  }
-  return r;
-}
-
-PyHits Trace(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, bool occlusion)
-{
-  PyHits out;
   out.scene = t.scene;
+  out.normals.reset();
   out.occlusion = occlusion;
   const RaySpan span = Rays(rays);
   TimeSpan tspan;
@@ -116,18 +126,16 @@ PyHits Trace(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, 
   t.lastInput = span.data();
   {
     nb::gil_scoped_release release;
-    t.Run([&] { t.tracer->Trace(span, tspan, out.unified, occlusion, t.config.stats ? &t.stats : nullptr); });
-    const PrimRanges ranges = t.scene->Ranges();
-    out.records.resize(out.unified.size());
-    t.Run([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.unified.size(), 65536), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i)
-          out.records[i] = FileForm(*t.scene, ranges, out.unified[i], occlusion);
-      });
-    });
+    t.Run([&] { t.tracer->Trace(span, tspan, out.records, occlusion, t.config.stats ? &t.stats : nullptr); });
   }
   out.rays = rays;
   out.times = times;
+}
+
+PyHits Trace(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, bool occlusion)
+{
+  PyHits out;
+  TraceInto(t, rays, times, occlusion, out);
   return out;
 }
 
@@ -395,7 +403,7 @@ NB_MODULE(_cellray, m)
             c.variant = variant.value_or("");
             c.isa = isa.value_or("");
             c.stats = stats;
-            c.unifiedHits = true;  // the records are converted to the file form; normals need the piece
+            c.unifiedHits = false;  // the .hits form, as `cellray trace` writes it
             c.params = ParamsFrom(params);
             if (threads < 0) throw InputError(fmt::format("threads {} is negative", threads));
             if (threads > 0) t->arena = std::make_unique<tbb::task_arena>(threads);
@@ -409,6 +417,14 @@ NB_MODULE(_cellray, m)
              return Trace(t, rays, times, occlusion);
            },
            "rays"_a.noconvert(), "times"_a.noconvert().none(), "occlusion"_a)
+      .def("_trace_into",
+           [](PyTracer& t, RayArray rays, std::optional<TimeArray> times, bool occlusion, PyHits& out) {
+             if (out.records.size() != rays.shape(0))
+               throw nb::value_error(fmt::format("out: {} hits for {} rays (out= must come from a call with as many "
+                                                 "rays)", out.records.size(), rays.shape(0)).c_str());
+             TraceInto(t, rays, times, occlusion, out);
+           },
+           "rays"_a.noconvert(), "times"_a.noconvert().none(), "occlusion"_a, "out"_a)
       .def("_occluded",
            [](PyTracer& t, RayArray rays, std::optional<TimeArray> times) {
              PyHits h = Trace(t, rays, times, true);
@@ -474,14 +490,29 @@ NB_MODULE(_cellray, m)
           const RaySpan rays = Rays(*h.rays);
           {
             nb::gil_scoped_release release;
+            const ref::ReferenceTracer& ref = ReferenceOf(h.scene);
             tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-              const HitRecord& u = h.unified[i];
-              if (u.prim == CR_NO_HIT || h.occlusion) return;
+              const HitRecord& rec = h.records[i];
+              if (rec.prim == CR_NO_HIT || h.occlusion || rec.prim >= h.scene->NumPrims()) return;
               const RayRecord& r = rays[i];
-              const glm::dvec3 p = glm::dvec3(r.org[0], r.org[1], r.org[2]) +
-                                   double(u.t) * glm::dvec3(r.dir[0], r.dir[1], r.dir[2]);
-              const double time = h.times ? double(h.times->data()[i]) : 0.0;
-              const SurfacePoint sp = SurfaceAt(*h.scene, u.prim, p, double(u.u), double(u.v), time);
+              ref::DRay ray = ref::MakeRay(r);
+              ray.time = h.times ? double(h.times->data()[i]) : 0.0;
+              const glm::dvec3 p = ray.o + double(rec.t) * ray.d;
+              // The piece hit (of a polygon's or patch's triangles, the one
+              // with a root nearest the hit), with its barycentrics or a CSG
+              // leaf's side, as the renderer's form would carry them.
+              std::vector<std::uint32_t> pieces;
+              ref.PiecesOf(rec.prim, pieces);
+              std::uint32_t g = pieces.empty() ? CR_NO_HIT : pieces[0];
+              double u = rec.u, v = rec.v, best = INFINITY;
+              for (std::uint32_t piece : pieces) {
+                double t[2], pu = 0.0, pv = 0.0;
+                const int k = ref.PieceRoots(piece, ray, t, &pu, &pv);
+                for (int j = 0; j < k && j < 1; ++j)
+                  if (std::abs(t[j] - double(rec.t)) < best) best = std::abs(t[j] - double(rec.t)), g = piece, u = pu, v = pv;
+              }
+              if (g == CR_NO_HIT) return;
+              const SurfacePoint sp = SurfaceAt(*h.scene, g, p, u, v, ray.time);
               for (int a = 0; a < 3; ++a) out[3 * i + std::size_t(a)] = sp.ng[a];
             });
           }
@@ -524,10 +555,27 @@ NB_MODULE(_cellray, m)
       "_validate_rays",
       [](RayArray rays) {
         const RaySpan span = Rays(rays);
-        for (std::size_t i = 0; i < span.size(); ++i) {
-          const std::string why = ValidateRay(span[i]);
-          if (!why.empty()) throw InputError(fmt::format("rays[{}]: {}", i, why));
+        // In parallel, a quick test per ray; the first bad ray's message
+        // from ValidateRay (the .rays reader's rules).
+        std::size_t first = span.size();
+        {
+          nb::gil_scoped_release release;
+          first = tbb::parallel_reduce(
+              tbb::blocked_range<std::size_t>(0, span.size(), 16384), span.size(),
+              [&](const tbb::blocked_range<std::size_t>& r, std::size_t best) {
+                for (std::size_t i = r.begin(); i != r.end() && i < best; ++i) {
+                  const RayRecord& x = span[i];
+                  const bool ok = std::isfinite(x.org[0]) & std::isfinite(x.org[1]) & std::isfinite(x.org[2]) &
+                                  std::isfinite(x.dir[0]) & std::isfinite(x.dir[1]) & std::isfinite(x.dir[2]) &
+                                  std::isfinite(x.tmin) & (x.tmin >= 0.0f) & (x.tmin <= x.tmax) &
+                                  ((x.dir[0] != 0.0f) | (x.dir[1] != 0.0f) | (x.dir[2] != 0.0f));
+                  if (!ok && !ValidateRay(x).empty()) return i;
+                }
+                return best;
+              },
+              [](std::size_t x, std::size_t y) { return std::min(x, y); });
         }
+        if (first < span.size()) throw InputError(fmt::format("rays[{}]: {}", first, ValidateRay(span[first])));
       },
       "rays"_a.noconvert());
   m.def(
