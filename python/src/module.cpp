@@ -11,6 +11,9 @@
 // Errors: InputError -> ValueError, RuntimeError (OpenCL names included) ->
 // RuntimeError.
 #include <cmath>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <cstring>
 #include <memory>
 #include <mutex>
@@ -51,6 +54,60 @@ namespace {
 using RayArray = nb::ndarray<const float, nb::shape<-1, 8>, nb::c_contig, nb::device::cpu>;
 using TimeArray = nb::ndarray<const float, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
 
+// Whether rays[b, e) all pass the quick test (finite origin, direction and
+// tmin, tmax not NaN, 0 <= tmin <= tmax, direction not zero). With AVX2 (the
+// machine's; chosen at run time), one 32-byte record is one vector.
+bool RaysLookValidScalar(const RayRecord* rays, std::size_t b, std::size_t e)
+{
+  bool ok = true;
+  for (std::size_t i = b; i < e; ++i) {
+    const RayRecord& x = rays[i];
+    ok &= std::isfinite(x.org[0]) & std::isfinite(x.org[1]) & std::isfinite(x.org[2]) & std::isfinite(x.dir[0]) &
+          std::isfinite(x.dir[1]) & std::isfinite(x.dir[2]) & std::isfinite(x.tmin) & (x.tmin >= 0.0f) &
+          (x.tmin <= x.tmax) & ((x.dir[0] != 0.0f) | (x.dir[1] != 0.0f) | (x.dir[2] != 0.0f));
+  }
+  return ok;
+}
+
+#if defined(__x86_64__)
+__attribute__((target("avx2"))) bool RaysLookValidAvx2(const RayRecord* rays, std::size_t b, std::size_t e)
+{
+  // Lanes: ox oy oz tmin dx dy dz tmax.
+  const __m256 absMask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 maxFinite = _mm256_set1_ps(3.40282347e38f);
+  __m256 bad = _mm256_setzero_ps();
+  for (std::size_t i = b; i < e; ++i) {
+    const __m256 x = _mm256_loadu_ps(reinterpret_cast<const float*>(rays + i));
+    const __m256 ax = _mm256_and_ps(x, absMask);
+    // Not finite (NaN compares true with NLE_UQ): lanes 0-6; lane 7 (tmax) may be +inf but not NaN.
+    const __m256 nonFinite = _mm256_cmp_ps(ax, maxFinite, _CMP_NLE_UQ);
+    const __m256 isNan = _mm256_cmp_ps(x, x, _CMP_UNORD_Q);
+    bad = _mm256_or_ps(bad, _mm256_blend_ps(nonFinite, isNan, 0x80));
+    // tmin < 0 or tmin > tmax (lane 3 against lane 7).
+    const __m128 hi = _mm256_extractf128_ps(x, 1);
+    const __m128 lo = _mm256_castps256_ps128(x);
+    const __m128 tmin = _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(3, 3, 3, 3));
+    const __m128 tmax = _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(3, 3, 3, 3));
+    __m128 b4 = _mm_or_ps(_mm_cmplt_ss(tmin, _mm_setzero_ps()), _mm_cmpgt_ss(tmin, tmax));
+    // Zero direction: lanes 4-6 all zero.
+    const __m128 dzero = _mm_cmpeq_ps(hi, _mm_setzero_ps());
+    const int z = _mm_movemask_ps(dzero) & 7;
+    if (z == 7) b4 = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    bad = _mm256_or_ps(bad, _mm256_castps128_ps256(_mm_and_ps(b4, _mm_castsi128_ps(_mm_set_epi32(0, 0, 0, -1)))));
+  }
+  return _mm256_movemask_ps(bad) == 0;
+}
+#endif
+
+bool RaysLookValid(const RayRecord* rays, std::size_t b, std::size_t e)
+{
+#if defined(__x86_64__)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) return RaysLookValidAvx2(rays, b, e);
+#endif
+  return RaysLookValidScalar(rays, b, e);
+}
+
 // A numpy array that owns a vector's buffer (moved in, never copied).
 template <class T, class V>
 nb::ndarray<nb::numpy, T> Own(std::vector<V>&& v, std::initializer_list<std::size_t> shape)
@@ -87,8 +144,43 @@ const ref::ReferenceTracer& ReferenceOf(const std::shared_ptr<const Scene>& scen
 
 // One trace's answers: the .hits records, as the CLI writes them (the tracer
 // writes them there: no conversion).
+// Result buffers of a tracer's calls that were given back (their Hits
+// collected): the next call of the same size writes into one, so a loop of
+// intersect calls does not fault in fresh pages each time, as the CLI's
+// repeats reuse their buffer.
+struct BufferPool {
+  std::mutex m;
+  std::vector<std::vector<HitRecord>> free;
+  std::vector<HitRecord> Take(std::size_t n)
+  {
+    std::lock_guard<std::mutex> lock(m);
+    for (auto it = free.begin(); it != free.end(); ++it)
+      if (it->size() == n) {
+        std::vector<HitRecord> v = std::move(*it);
+        free.erase(it);
+        return v;
+      }
+    return {};
+  }
+  void Give(std::vector<HitRecord>&& v)
+  {
+    if (v.size() < 4096) return;
+    std::lock_guard<std::mutex> lock(m);
+    if (free.size() >= 2) free.erase(free.begin());
+    free.push_back(std::move(v));
+  }
+};
+
 struct PyHits {
+  PyHits() = default;
+  PyHits(PyHits&&) = default;
+  PyHits& operator=(PyHits&&) = default;
+  ~PyHits()
+  {
+    if (pool) pool->Give(std::move(records));
+  }
   std::shared_ptr<const Scene> scene;
+  std::shared_ptr<BufferPool> pool;
   std::vector<HitRecord> records;  // FORMATS.md form
   // The caller's arrays (referenced, not copied): hit points for normals.
   std::optional<RayArray> rays;
@@ -104,6 +196,7 @@ struct PyTracer {
   TraceConfig config;
   TraceStatsSum stats;
   const void* lastInput = nullptr;  // where the last call read its rays (tests check it is the caller's array)
+  std::shared_ptr<BufferPool> pool = std::make_shared<BufferPool>();
 
   template <class F>
   void Run(F&& f)
@@ -118,8 +211,10 @@ struct PyTracer {
 void TraceInto(PyTracer& t, const RayArray& rays, std::optional<TimeArray> times, bool occlusion, PyHits& out)
 {
   out.scene = t.scene;
+  out.pool = t.pool;
   out.normals.reset();
   out.occlusion = occlusion;
+  if (out.records.size() != rays.shape(0)) out.records = t.pool->Take(rays.shape(0));
   const RaySpan span = Rays(rays);
   TimeSpan tspan;
   if (times) tspan = TimeSpan(times->data(), times->shape(0));
@@ -555,22 +650,17 @@ NB_MODULE(_cellray, m)
       "_validate_rays",
       [](RayArray rays) {
         const RaySpan span = Rays(rays);
-        // In parallel, a quick test per ray; the first bad ray's message
-        // from ValidateRay (the .rays reader's rules).
+        // In parallel, the quick test over blocks; in a failing block, the
+        // first bad ray's message from ValidateRay (the .rays reader's rules).
         std::size_t first = span.size();
         {
           nb::gil_scoped_release release;
           first = tbb::parallel_reduce(
               tbb::blocked_range<std::size_t>(0, span.size(), 16384), span.size(),
               [&](const tbb::blocked_range<std::size_t>& r, std::size_t best) {
-                for (std::size_t i = r.begin(); i != r.end() && i < best; ++i) {
-                  const RayRecord& x = span[i];
-                  const bool ok = std::isfinite(x.org[0]) & std::isfinite(x.org[1]) & std::isfinite(x.org[2]) &
-                                  std::isfinite(x.dir[0]) & std::isfinite(x.dir[1]) & std::isfinite(x.dir[2]) &
-                                  std::isfinite(x.tmin) & (x.tmin >= 0.0f) & (x.tmin <= x.tmax) &
-                                  ((x.dir[0] != 0.0f) | (x.dir[1] != 0.0f) | (x.dir[2] != 0.0f));
-                  if (!ok && !ValidateRay(x).empty()) return i;
-                }
+                if (r.begin() >= best || RaysLookValid(span.data(), r.begin(), r.end())) return best;
+                for (std::size_t i = r.begin(); i != r.end() && i < best; ++i)
+                  if (!ValidateRay(span[i]).empty()) return i;
                 return best;
               },
               [](std::size_t x, std::size_t y) { return std::min(x, y); });

@@ -208,3 +208,31 @@ def test_read_write_round_trip(tmp_path):
     back = cellray.read_hits(tmp_path / "h.hits")
     assert back.dtype == cellray.HIT_DTYPE
     assert np.array_equal(back.view(np.uint32), h._records().reshape(-1))
+
+
+def test_every_kind_of_bad_ray_is_found_anywhere():
+    # The check runs block by block (a quick vector test, then the exact rule): each kind of bad ray, alone in a
+    # large set at a block's edge or inside one, is named by its row.
+    s = spd("tetra")
+    t = s.tracer()
+    good = s.rays("random", count=70000)
+    t.intersect(good)  # all valid
+    cases = {"NaN": (4, np.nan), "infinite origin": (0, np.inf), "infinite direction": (6, -np.inf),
+             "zero direction": (None, 0.0), "tmin": (3, -1.0), "infinite tmin": (3, np.inf), "NaN in tmax": (7, np.nan)}
+    for why, (col, value) in cases.items():
+        for row in (0, 16383, 16384, 40000, 69999):
+            bad = good.copy()
+            if col is None:
+                bad[row, 4:7] = 0.0
+            else:
+                bad[row, col] = value
+            with pytest.raises(ValueError, match=rf"rays\[{row}\]"):
+                t.intersect(bad)
+    bad = good.copy()
+    bad[123, 3], bad[123, 7] = 2.0, 1.0
+    with pytest.raises(ValueError, match=r"rays\[123\]: tmin 2 > tmax 1"):
+        t.intersect(bad)
+    ok = good.copy()
+    ok[5, 7] = np.inf
+    ok[6, 3] = -0.0
+    t.intersect(ok)  # tmax = inf and tmin = -0 are allowed, as the .rays reader allows them
