@@ -156,6 +156,9 @@ class Scene:
         """The rays `cellray rays` writes: primary (through the pixel centres, or the corners), shadow, diffuse,
         random, soft. width, height: the image (0: the camera's); count: secondary rays (0: width x height).
         Returns an (N, 8) float32 array; with return_times, (rays, times) (a moving scene's shutter times)."""
+        for name, v in (("width", width), ("height", height), ("count", count), ("seed", seed)):
+            if int(v) < 0:
+                raise ValueError(f"rays: {name} {v} is negative")
         r, t = self._s._rays(kind, int(width), int(height), bool(spd_corners), int(seed), int(count))
         return (r, t) if return_times else r
 
@@ -163,7 +166,11 @@ class Scene:
                area_lights=0.0, fresnel=False, sides="auto", accel="bvh", backend="simd", precision="robust",
                threads=0):
         """Renders as `cellray render` does; returns an (H, W, 3) float32 linear image."""
-        w, h = (0, 0) if size is None else size
+        w, h = (0, 0) if size is None else (int(size[0]), int(size[1]))
+        if size is not None and (w < 1 or h < 1 or w > 65536 or h > 65536):
+            raise ValueError(f"render: size {size} is not (W, H) with W and H in 1..65536")
+        if int(seed) < 0 or int(threads) < 0 or float(area_lights) < 0.0:
+            raise ValueError("render: seed, threads and area_lights must be >= 0")
         return self._s._render(accel, backend, precision, int(threads), int(w), int(h), int(spp), integrator,
                                int(depth or 0), bool(spd), int(seed), diffuse or "", float(area_lights),
                                bool(fresnel), sides)

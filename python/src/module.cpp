@@ -19,6 +19,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <fmt/format.h>
@@ -259,7 +260,14 @@ AccelParams ParamsFrom(const nb::dict& d)
       else snake += c;                                                      \
     }                                                                       \
     if (key == snake) {                                                     \
-      p.f = nb::cast<T>(v);                                                 \
+      T val{};                                                              \
+      if (!nb::try_cast<T>(v, val))                                         \
+        throw nb::type_error(("structure parameter '" + key + "': expected " + \
+                              (std::is_arithmetic_v<T> ? "a number" : "a string")).c_str()); \
+      if constexpr (std::is_arithmetic_v<T>)                                \
+        if (!(val >= T(0)))                                                 \
+          throw InputError(fmt::format("structure parameter '{}' = {}: must be >= 0 (0: the default)", key, val)); \
+      p.f = val;                                                            \
       known = true;                                                         \
     }                                                                       \
   }

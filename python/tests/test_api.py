@@ -169,6 +169,18 @@ def test_bad_arguments_raise_clear_errors():
         t.intersect(rays, times=np.full(10, 2.0))
     with pytest.raises(ValueError, match="vertex index"):
         cellray.Scene.from_arrays([[0, 0, 0]], [[0, 1, 2]])
+    with pytest.raises(TypeError, match="grid_density': expected a number"):
+        s.tracer(accel="grid", grid_density="x")
+    with pytest.raises(ValueError, match="grid_density' = -1"):
+        s.tracer(accel="grid", grid_density=-1)
+    with pytest.raises(ValueError, match="count -1 is negative"):
+        s.rays("random", count=-1)
+    with pytest.raises(ValueError, match="width -5"):
+        s.rays("primary", width=-5, height=3)
+    with pytest.raises(ValueError, match="size"):
+        s.render(size=(-3, 4))
+    with pytest.raises(ValueError, match="--spp 0"):
+        s.render(size=(4, 4), spp=0)
 
 
 def test_motion_rays_with_times():
