@@ -30,21 +30,6 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
   cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; opencl: ray or packet; embree: single or packet8 (-robust: RTC_SCENE_FLAG_ROBUST); default: the backend's choice");
 }
 
-TraceConfig TracerOptions::ToConfig() const
-{
-  TraceConfig c;
-  c.accel = ParseAccelKind(accel);
-  c.backend = backend == "auto" ? ResolveAutoBackend(device) : ParseBackend(backend);
-  c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
-  c.precision = ParsePrecision(precision);
-  c.threads = threads;
-  c.params = params;
-  c.isa = isa;
-  c.device = device;
-  c.variant = variant;
-  return c;
-}
-
 namespace {
 std::string& CommandLineStore()
 {

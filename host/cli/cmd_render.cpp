@@ -107,15 +107,7 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, Re
     band->Finish();
     const BandStats& bs = band->Stats();
     busy = stats.totalMs + bs.serveMs - bs.exchangeMs;
-    static_assert(std::is_trivially_copyable_v<BandStats>);
-    std::vector<char> bytes(sizeof(BandStats));
-    std::memcpy(bytes.data(), &bs, sizeof(BandStats));
-    const std::vector<char> all = mpi::GatherBytes(bytes);
-    for (std::size_t at = 0; at + sizeof(BandStats) <= all.size(); at += sizeof(BandStats)) {
-      BandStats r;
-      std::memcpy(&r, all.data() + at, sizeof(BandStats));
-      info.bandStats.push_back(r);
-    }
+    info.bandStats = mpi::GatherAll(bs);
   }
   // This rank's rows: (y0, y1) then the floats of rows [y0, y1), per band.
   std::vector<char> packed;
@@ -127,12 +119,9 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, Re
     const char* fb = reinterpret_cast<const char*>(part.rgb.data() + std::size_t(y0) * rowFloats);
     packed.insert(packed.end(), fb, fb + std::size_t(y1 - y0) * rowFloats * sizeof(float));
   }
-  static_assert(std::is_trivially_copyable_v<RenderStats>);
-  std::vector<char> statsBytes(sizeof(RenderStats));
-  std::memcpy(statsBytes.data(), &stats, sizeof(RenderStats));
   const auto ta = std::chrono::steady_clock::now();
   const std::vector<char> all = mpi::GatherBytes(packed);
-  const std::vector<char> allStats = mpi::GatherBytes(statsBytes);
+  const std::vector<RenderStats> allStats = mpi::GatherAll(stats);
   info.busyMs = mpi::GatherDouble(busy);
   {
     rusage ru{};
@@ -158,11 +147,7 @@ Image RenderDistributed(const Scene& scene, Tracer& tracer, BandTracer* band, Re
     at += n * sizeof(float);
   }
   // The ranks' counters summed (times: the slowest rank's).
-  for (std::size_t at = sizeof(RenderStats); at + sizeof(RenderStats) <= allStats.size(); at += sizeof(RenderStats)) {
-    RenderStats r;
-    std::memcpy(&r, allStats.data() + at, sizeof(RenderStats));
-    AddRenderStats(stats, r);
-  }
+  for (std::size_t r = 1; r < allStats.size(); ++r) AddRenderStats(stats, allStats[r]);
   info.assembleMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - ta).count();
   return img;
 }

@@ -13,16 +13,8 @@ namespace cr::cli {
 
 using Run = std::function<int()>;
 
-// Options every command that builds a tracer shares.
-struct TracerOptions {
-  std::string accel = "bvh";
-  std::string backend = "auto";
-  std::string precision = "robust";
-  int threads = 0;
-  AccelParams params;  // the builders' (CR_ACCEL_PARAMS)
-  std::string isa, device, variant;
-  TraceConfig ToConfig() const;  // validates names (InputError)
-};
+// The options every command that builds a tracer shares (TracerOptions,
+// host/trace/tracer.h, which the Python API fills too).
 void AddTracerOptions(CLI::App* cmd, TracerOptions& o);
 
 // Parses "WxH" (InputError on anything else).

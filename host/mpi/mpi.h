@@ -16,6 +16,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 #include <string>
 #include <vector>
 
@@ -60,6 +62,18 @@ void Barrier();
 // Every rank's bytes to rank 0, concatenated in rank order there (others get
 // an empty vector); also the per-rank sizes on rank 0.
 std::vector<char> GatherBytes(const std::vector<char>& mine, std::vector<std::uint64_t>* sizes = nullptr);
+// A plain struct from every rank, on rank 0 in rank order (others: empty).
+template <class T>
+std::vector<T> GatherAll(const T& mine)
+{
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<char> bytes(sizeof(T));
+  std::memcpy(bytes.data(), &mine, sizeof(T));
+  const std::vector<char> all = GatherBytes(bytes);
+  std::vector<T> out(all.size() / sizeof(T));
+  if (!out.empty()) std::memcpy(out.data(), all.data(), out.size() * sizeof(T));
+  return out;
+}
 // The same double from every rank, on rank 0 (others: empty).
 std::vector<double> GatherDouble(double v);
 // Rank 0's bytes to every rank.

@@ -66,6 +66,21 @@ Backend ResolveAutoBackend(const std::string& deviceSpec)
   }
 }
 
+TraceConfig TracerOptions::ToConfig() const
+{
+  TraceConfig c;
+  c.accel = ParseAccelKind(accel);
+  c.backend = backend == "auto" ? ResolveAutoBackend(device) : ParseBackend(backend);
+  c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
+  c.precision = ParsePrecision(precision);
+  c.threads = threads;
+  c.params = params;
+  c.isa = isa;
+  c.device = device;
+  c.variant = variant;
+  return c;
+}
+
 bool EmbreeAvailable()
 {
 #ifdef CELLRAY_HAVE_EMBREE

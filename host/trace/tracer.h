@@ -63,6 +63,18 @@ struct TraceConfig {
   bool fallbackToSimd = false;
 };
 
+// What a user asks for by name (the CLI's options, the Python API's
+// arguments): ToConfig validates the names (InputError) and resolves `auto`.
+struct TracerOptions {
+  std::string accel = "bvh";
+  std::string backend = "auto";
+  std::string precision = "robust";
+  int threads = 0;
+  AccelParams params;  // the builders' (CR_ACCEL_PARAMS)
+  std::string isa, device, variant;
+  TraceConfig ToConfig() const;
+};
+
 class Tracer {
  public:
   virtual ~Tracer() = default;

@@ -93,6 +93,17 @@ def make_rays(origins, directions, tmin=0.0, tmax=_np.inf):
 __all__.append("make_rays")
 
 
+def _rays_given(call, rays, origins, directions, tmin, tmax):
+    """The checked (N, 8) array of a call given rays, or origins and directions."""
+    if rays is None:
+        if origins is None or directions is None:
+            raise TypeError(f"{call}: give rays (N, 8) or origins and directions (N, 3)")
+        rays = make_rays(origins, directions, tmin, tmax)
+    elif origins is not None or directions is not None:
+        raise TypeError(f"{call}: give rays or origins and directions, not both")
+    return _ray_array(rays)
+
+
 class Scene:
     """A scene: primitives, materials, camera and lights."""
 
@@ -197,13 +208,7 @@ class Tracer:
         traced in place, or of origins and directions (N, 3). The GIL is released while tracing.
         out: a Hits of an earlier call with as many rays, written over and returned (no new memory: its
         arrays, and views of them, then hold the new answers)."""
-        if rays is None:
-            if origins is None or directions is None:
-                raise TypeError("intersect: give rays (N, 8) or origins and directions (N, 3)")
-            rays = make_rays(origins, directions, tmin, tmax)
-        elif origins is not None or directions is not None:
-            raise TypeError("intersect: give rays or origins and directions, not both")
-        rays = _ray_array(rays)
+        rays = _rays_given("intersect", rays, origins, directions, tmin, tmax)
         if out is not None:
             if not isinstance(out, Hits):
                 raise TypeError(f"out: expected a cellray.Hits, got {type(out).__name__}")
@@ -213,11 +218,7 @@ class Tracer:
 
     def occluded(self, rays=None, *, origins=None, directions=None, tmin=0.0, tmax=_np.inf, times=None):
         """Whether each ray is blocked in [tmin, tmax]: an (N,) bool array."""
-        if rays is None:
-            if origins is None or directions is None:
-                raise TypeError("occluded: give rays (N, 8) or origins and directions (N, 3)")
-            rays = make_rays(origins, directions, tmin, tmax)
-        rays = _ray_array(rays)
+        rays = _rays_given("occluded", rays, origins, directions, tmin, tmax)
         return self._t._occluded(rays, _time_array(times, rays.shape[0]))
 
     def stats(self) -> dict:

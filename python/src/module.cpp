@@ -245,6 +245,12 @@ nb::ndarray<nb::numpy, T, nb::ndim<1>> Field(nb::handle self, const std::vector<
   return nb::ndarray<nb::numpy, T, nb::ndim<1>>(reinterpret_cast<T*>(const_cast<char*>(base)), 1, &n, self, &stride);
 }
 
+template <class T, std::size_t kOffset>
+nb::ndarray<nb::numpy, T, nb::ndim<1>> FieldOf(nb::handle self)
+{
+  return Field<T>(self, nb::cast<const PyHits&>(self).records, kOffset);
+}
+
 AccelParams ParamsFrom(const nb::dict& d)
 {
   AccelParams p;
@@ -447,11 +453,12 @@ NB_MODULE(_cellray, m)
               scene = std::make_shared<Scene>(*s.scene);
               PointLightsToSpheres(*scene, areaLights);
             }
-            TraceConfig cfg;
-            cfg.accel = ParseAccelKind(accel);
-            cfg.backend = ParseBackend(backend);
-            cfg.precision = ParsePrecision(precision);
-            cfg.threads = threads;
+            TracerOptions o;
+            o.accel = accel;
+            o.backend = backend;
+            o.precision = precision;
+            o.threads = threads;
+            TraceConfig cfg = o.ToConfig();
             cfg.unifiedHits = true;
             RenderOptions ro;
             ro.width = width;
@@ -496,18 +503,19 @@ NB_MODULE(_cellray, m)
              std::optional<std::string> variant, std::optional<std::string> isa, bool stats, const nb::dict& params) {
             new (t) PyTracer();
             t->scene = s.scene;
+            TracerOptions o;
+            o.accel = accel;
+            o.backend = backend;
+            o.precision = precision;
+            o.threads = threads;
+            o.device = device.value_or("");
+            o.variant = variant.value_or("");
+            o.isa = isa.value_or("");
+            o.params = ParamsFrom(params);
+            t->config = o.ToConfig();
             TraceConfig& c = t->config;
-            c.accel = ParseAccelKind(accel);
-            c.backend = backend == "auto" ? ResolveAutoBackend(device.value_or("")) : ParseBackend(backend);
-            c.fallbackToSimd = backend == "auto" && c.backend == Backend::OpenCL;
-            c.precision = ParsePrecision(precision);
-            c.threads = threads;
-            c.device = device.value_or("");
-            c.variant = variant.value_or("");
-            c.isa = isa.value_or("");
             c.stats = stats;
             c.unifiedHits = false;  // the .hits form, as `cellray trace` writes it
-            c.params = ParamsFrom(params);
             if (threads < 0) throw InputError(fmt::format("threads {} is negative", threads));
             if (threads > 0) t->arena = std::make_unique<tbb::task_arena>(threads);
             nb::gil_scoped_release release;
@@ -568,23 +576,12 @@ NB_MODULE(_cellray, m)
   nb::class_<PyHits>(m, "Hits")
       .def("__len__", [](const PyHits& h) { return h.records.size(); })
       .def_prop_ro("occlusion", [](const PyHits& h) { return h.occlusion; })
-      .def_prop_ro("t", [](nb::handle self) {
-        const PyHits& h = nb::cast<const PyHits&>(self);
-        return Field<float>(self, h.records, offsetof(HitRecord, t));
-      }, nb::rv_policy::reference_internal)
-      .def_prop_ro("prim", [](nb::handle self) {
-        // CR_NO_HIT (0xFFFFFFFF) reads as -1.
-        const PyHits& h = nb::cast<const PyHits&>(self);
-        return Field<std::int32_t>(self, h.records, offsetof(HitRecord, prim));
-      }, nb::rv_policy::reference_internal)
-      .def_prop_ro("u", [](nb::handle self) {
-        const PyHits& h = nb::cast<const PyHits&>(self);
-        return Field<float>(self, h.records, offsetof(HitRecord, u));
-      }, nb::rv_policy::reference_internal)
-      .def_prop_ro("v", [](nb::handle self) {
-        const PyHits& h = nb::cast<const PyHits&>(self);
-        return Field<float>(self, h.records, offsetof(HitRecord, v));
-      }, nb::rv_policy::reference_internal)
+      // t, prim, u, v: views of one field of every record (prim: CR_NO_HIT
+      // (0xFFFFFFFF) reads as -1).
+      .def_prop_ro("t", &FieldOf<float, offsetof(HitRecord, t)>, nb::rv_policy::reference_internal)
+      .def_prop_ro("prim", &FieldOf<std::int32_t, offsetof(HitRecord, prim)>, nb::rv_policy::reference_internal)
+      .def_prop_ro("u", &FieldOf<float, offsetof(HitRecord, u)>, nb::rv_policy::reference_internal)
+      .def_prop_ro("v", &FieldOf<float, offsetof(HitRecord, v)>, nb::rv_policy::reference_internal)
       .def_prop_ro("normal", [](nb::handle self) {
         PyHits& h = nb::cast<PyHits&>(self);
         const std::size_t n = h.records.size();
