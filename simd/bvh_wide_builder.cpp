@@ -2,9 +2,13 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
+#include <mutex>
 #include <cmath>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "host/core/error.h"
 
@@ -25,36 +29,55 @@ namespace {
 
 template <int N, int K>
 struct Collapser {
+  Collapser(const BVHData& b, const KernelScene& r, WideBVH<N, K>& o) : bvh(b), rows(r), out(o) {}
   const BVHData& bvh;
   const KernelScene& rows;
   WideBVH<N, K>& out;
 
+  // Where the next wide node, mixed-type leaf and pack of each type go.
+  // The collapse walks the tree twice: counting (to size the arrays, and to
+  // give each subtree of the top levels its place), then writing, the top
+  // levels' subtrees in parallel. The layout is the sequential one (a wide
+  // node, then each child's subtree or packs in order), whatever the
+  // threads do.
+  struct Cursor {
+    std::uint64_t node = 0, leaf = 1;  // leaf 0: the empty leaf
+    std::uint64_t pack[CR_NUM_PRIM_TYPES] = {};
+  };
+  // Wide levels written in parallel (8^2 subtrees).
+  static constexpr int kParallelDepth = 2;
+
   template <class Pack, class Fill>
-  std::uint32_t Packs(std::vector<Pack>& packs, const std::uint32_t* g, std::uint32_t n, Fill fill)
+  std::uint32_t Packs(Pack* packs, std::uint64_t& at, const std::uint32_t* g, std::uint32_t n, Fill fill)
   {
-    const auto first = static_cast<std::uint32_t>(packs.size());
+    const std::uint64_t first = at;
+    if (first + (n + K - 1) / K >= kWideLeafFlag) throw RuntimeError("simd: too many packs for the wide layout");
     for (std::uint32_t i = 0; i < n; i += K) {
-      Pack p{};
-      for (int l = 0; l < K; ++l) {
-        p.g[l] = CR_NO_HIT;
-        if (i + std::uint32_t(l) < n) {
-          p.g[l] = g[i + l];
-          fill(p, l, g[i + l]);
+      if (packs) {
+        Pack& p = packs[at];
+        p = Pack{};
+        for (int l = 0; l < K; ++l) {
+          p.g[l] = CR_NO_HIT;
+          if (i + std::uint32_t(l) < n) {
+            p.g[l] = g[i + l];
+            fill(p, l, g[i + l]);
+          }
         }
       }
-      packs.push_back(p);
+      ++at;
     }
-    return first;
+    return static_cast<std::uint32_t>(first);
   }
 
   struct Slot {
     std::uint32_t child, meta;
   };
 
-  // A leaf of the refs [refs, refs + n), sorted (so each type is one run).
-  Slot Leaf(const std::uint32_t* refs, std::uint32_t n)
+  // A leaf of the refs [refs, refs + n), sorted (so each type is one run),
+  // at `c` (written when `write`).
+  Slot Leaf(const std::uint32_t* refs, std::uint32_t n, Cursor& c, bool write)
   {
-    const PrimRanges& c = rows.ranges;
+    const PrimRanges& r = rows.ranges;
     auto packCount = [](std::uint32_t m) {
       const std::uint32_t p = (m + K - 1) / K;
       if (p > 255) throw RuntimeError("simd: BVH leaf too large for the wide layout");
@@ -63,27 +86,26 @@ struct Collapser {
     WideLeaf leaf{};
     std::uint32_t i = 0;
     int types = 0, type = 0;
-#define CR_SIMD_LEAF_PACKS_(T, U, a)                                                                        \
-  {                                                                                                       \
-    std::uint32_t m = 0;                                                                                  \
-    while (i + m < n && refs[i + m] < Prim_End(&c, CR_PRIM_##U)) ++m;                                     \
-    leaf.count[CR_PRIM_##U] = packCount(m);                                                               \
-    leaf.first[CR_PRIM_##U] = Packs(out.a, refs + i, m, [&](auto& p, int l, std::uint32_t g) {           \
-      SimdPrim<T>::template Fill<K>(p, l, PrimData<T>(rows)[Prim_Local(&c, CR_PRIM_##U, g)]);            \
-    });                                                                                                   \
-    if (m) ++types, type = CR_PRIM_##U;                                                                   \
-    i += m;                                                                                               \
+#define CR_SIMD_LEAF_PACKS_(T, U, a)                                                                         \
+  {                                                                                                        \
+    std::uint32_t m = 0;                                                                                   \
+    while (i + m < n && refs[i + m] < Prim_End(&r, CR_PRIM_##U)) ++m;                                      \
+    leaf.count[CR_PRIM_##U] = packCount(m);                                                                \
+    leaf.first[CR_PRIM_##U] = Packs(write ? out.a.data() : nullptr, c.pack[CR_PRIM_##U], refs + i, m,     \
+                                    [&](auto& p, int l, std::uint32_t g) {                                 \
+                                      SimdPrim<T>::template Fill<K>(                                       \
+                                          p, l, PrimData<T>(rows)[Prim_Local(&r, CR_PRIM_##U, g)]);         \
+                                    });                                                                    \
+    if (m) ++types, type = CR_PRIM_##U;                                                                    \
+    i += m;                                                                                                \
   }
     CR_PRIM_TYPES(CR_SIMD_LEAF_PACKS_)
 #undef CR_SIMD_LEAF_PACKS_
-    if (types == 1) {
-      if (leaf.first[type] >= kWideLeafFlag) throw RuntimeError("simd: too many packs for the wide layout");
-      return {kWideLeafFlag | leaf.first[type], WideLeafMeta(std::uint32_t(type), leaf.count[type])};
-    }
-    const auto index = static_cast<std::uint32_t>(out.leaves.size());
+    if (types == 1) return {kWideLeafFlag | leaf.first[type], WideLeafMeta(std::uint32_t(type), leaf.count[type])};
+    const std::uint64_t index = c.leaf++;
     if (index >= kWideLeafFlag) throw RuntimeError("simd: too many BVH leaves for the wide layout");
-    out.leaves.push_back(leaf);
-    return {kWideLeafFlag | index, kWideMixedLeaf};
+    if (write) out.leaves[index] = leaf;
+    return {kWideLeafFlag | static_cast<std::uint32_t>(index), kWideMixedLeaf};
   }
 
   // The refs of binary subtree b in one sorted run (a merged leaf).
@@ -121,10 +143,12 @@ struct Collapser {
   // other, all 8-12% faster than no merging; 0.5 worse on gears.
   static constexpr double kPackCost = 2.0;
   static constexpr std::uint32_t kMergeRefs = 2 * K;
-  std::vector<float> cost;              // C(n, j) at n * (N + 1) + j (float: 36 bytes a node at 10^7 nodes)
-  std::vector<std::uint8_t> choice;     // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
-  std::vector<std::uint8_t> rootSplit;  // i of W(n)
-  std::vector<std::uint8_t> asLeaf;     // F(n) = L(n)
+  // Kept per binary node for the writing walk; the costs C(n, .) and the
+  // refs per type live only on the recursion's stack (at 10^7 nodes the
+  // arrays of both were 700 MB).
+  NoInitVector<std::uint8_t> choice;     // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
+  NoInitVector<std::uint8_t> rootSplit;  // i of W(n)
+  NoInitVector<std::uint8_t> asLeaf;     // F(n) = L(n)
 
   static double Area(const BVHNode& b)
   {
@@ -133,64 +157,81 @@ struct Collapser {
     return ex < 0.0 ? 0.0 : ex * ey + ey * ez + ez * ex;
   }
 
+  // C(b, 1..N) and b's refs per type (up to kMergeRefs + 1: only small
+  // subtrees merge; a binary leaf's exactly, at most 255).
+  struct Sub {
+    float C[N + 1];
+    std::array<std::uint16_t, CR_NUM_PRIM_TYPES> refs;
+  };
+  // Binary levels planned in parallel.
+  static constexpr int kPlanParallelDepth = 8;
+
+  static std::uint32_t PackCount(const std::array<std::uint16_t, CR_NUM_PRIM_TYPES>& r, std::uint32_t& total)
+  {
+    std::uint32_t p = 0;
+    total = 0;
+    for (std::uint32_t m : r) p += (m + K - 1) / K, total += m;
+    return p;
+  }
+
+  void Plan(std::uint32_t b, int depth, Sub& s)
+  {
+    const BVHNode& bn = bvh.nodes[b];
+    std::uint8_t* how = &choice[std::size_t(b) * (N + 1)];
+    float* C = s.C;
+    std::uint32_t total = 0;
+    if (bn.count > 0) {
+      s.refs.fill(0);
+      for (std::uint32_t i = bn.first; i < bn.first + bn.count; ++i)
+        for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
+          if (bvh.refs[i] < Prim_End(&rows.ranges, k)) {
+            ++s.refs[k];
+            break;
+          }
+      const float L = static_cast<float>(kPackCost * Area(bn) * PackCount(s.refs, total));
+      for (int j = 1; j <= N; ++j) C[j] = L, how[j] = 0;
+      asLeaf[b] = 1;
+      rootSplit[b] = 0;
+      return;
+    }
+    Sub s0, s1;
+    if (depth < kPlanParallelDepth)
+      tbb::parallel_invoke([&] { Plan(bn.first, depth + 1, s0); }, [&] { Plan(bn.first + 1, depth + 1, s1); });
+    else
+      Plan(bn.first, depth + 1, s0), Plan(bn.first + 1, depth + 1, s1);
+    for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
+      s.refs[k] = static_cast<std::uint16_t>(std::min<std::uint32_t>(s0.refs[k] + s1.refs[k], kMergeRefs + 1));
+    const float* C0 = s0.C;
+    const float* C1 = s1.C;
+    float best = INFINITY;
+    rootSplit[b] = 0;
+    for (int i = 1; i < N; ++i)
+      if (C0[i] + C1[N - i] < best) best = C0[i] + C1[N - i], rootSplit[b] = std::uint8_t(i);
+    C[1] = static_cast<float>(Area(bn)) + best;
+    const std::uint32_t p = PackCount(s.refs, total);
+    const float L = static_cast<float>(kPackCost * Area(bn) * p);
+    asLeaf[b] = 0;
+    if (total <= kMergeRefs && L <= C[1]) {
+      C[1] = L;
+      asLeaf[b] = 1;
+    }
+    how[1] = 0;
+    for (int j = 2; j <= N; ++j) {
+      C[j] = C[j - 1];
+      how[j] = N + 1;
+      for (int i = 1; i < j; ++i)
+        if (C0[i] + C1[j - i] < C[j]) C[j] = C0[i] + C1[j - i], how[j] = std::uint8_t(i);
+    }
+  }
+
   void Plan()
   {
     const std::size_t n = bvh.nodes.size();
-    cost.assign(n * (N + 1), 0.0f);
-    choice.assign(n * (N + 1), 0);
-    rootSplit.assign(n, 0);
-    asLeaf.assign(n, 0);
-    // Refs per type of each subtree (up to kMergeRefs + 1: only small ones matter).
-    std::vector<std::array<std::uint32_t, CR_NUM_PRIM_TYPES>> refsOf(n);
-    auto packs = [](const std::array<std::uint32_t, CR_NUM_PRIM_TYPES>& r, std::uint32_t& total) {
-      std::uint32_t p = 0;
-      total = 0;
-      for (std::uint32_t m : r) p += (m + K - 1) / K, total += m;
-      return p;
-    };
-    // Children are stored after their parent (bvh_builder.cpp Flatten), so
-    // a backward sweep sees children first.
-    for (std::size_t b = n; b-- > 0;) {
-      const BVHNode& bn = bvh.nodes[b];
-      float* C = &cost[b * (N + 1)];
-      std::uint8_t* how = &choice[b * (N + 1)];
-      std::uint32_t total = 0;
-      if (bn.count > 0) {
-        auto& r = refsOf[b];
-        r.fill(0);
-        for (std::uint32_t i = bn.first; i < bn.first + bn.count; ++i)
-          for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
-            if (bvh.refs[i] < Prim_End(&rows.ranges, k)) {
-              ++r[k];
-              break;
-            }
-        const float L = static_cast<float>(kPackCost * Area(bn) * packs(r, total));
-        for (int j = 1; j <= N; ++j) C[j] = L, how[j] = 0;
-        asLeaf[b] = 1;
-        continue;
-      }
-      for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k)
-        refsOf[b][k] = std::min(refsOf[bn.first][k] + refsOf[bn.first + 1][k], kMergeRefs + 1);
-      const float* C0 = &cost[std::size_t(bn.first) * (N + 1)];
-      const float* C1 = &cost[std::size_t(bn.first + 1) * (N + 1)];
-      float best = INFINITY;
-      for (int i = 1; i < N; ++i)
-        if (C0[i] + C1[N - i] < best) best = C0[i] + C1[N - i], rootSplit[b] = std::uint8_t(i);
-      C[1] = static_cast<float>(Area(bn)) + best;
-      const std::uint32_t p = packs(refsOf[b], total);
-      const float L = static_cast<float>(kPackCost * Area(bn) * p);
-      if (total <= kMergeRefs && L <= C[1]) {
-        C[1] = L;
-        asLeaf[b] = 1;
-      }
-      how[1] = 0;
-      for (int j = 2; j <= N; ++j) {
-        C[j] = C[j - 1];
-        how[j] = N + 1;
-        for (int i = 1; i < j; ++i)
-          if (C0[i] + C1[j - i] < C[j]) C[j] = C0[i] + C1[j - i], how[j] = std::uint8_t(i);
-      }
-    }
+    choice.resize(n * (N + 1));
+    rootSplit.resize(n);
+    asLeaf.resize(n);
+    Sub root;
+    Plan(0, 0, root);
   }
 
   // The children C(b, j) chose.
@@ -212,39 +253,99 @@ struct Collapser {
     }
   }
 
-  // Wide node for binary node b (interior, or the root when it is a leaf).
-  std::uint32_t Node(std::uint32_t b)
+  // The children of wide node b (binary node b: interior, or the root when
+  // it is a leaf).
+  int WideKids(std::uint32_t b, std::uint32_t* kids) const
   {
-    const auto self = static_cast<std::uint32_t>(out.nodes.size());
-    out.nodes.emplace_back();
-    std::uint32_t kids[N];
     int nKids = 0;
-    const BVHNode& bn = bvh.nodes[b];
     if (asLeaf[b]) {
       kids[nKids++] = b;
     } else {
       const int i = rootSplit[b];
-      Kids(bn.first, i, kids, nKids);
-      Kids(bn.first + 1, N - i, kids, nKids);
+      Kids(bvh.nodes[b].first, i, kids, nKids);
+      Kids(bvh.nodes[b].first + 1, N - i, kids, nKids);
     }
-    Slot slot[N];
+    return nKids;
+  }
+
+  // Child b of a wide node, at `c`: a wide node of its own or a leaf.
+  Slot Kid(std::uint32_t b, Cursor& c, int depth, bool write)
+  {
+    if (!asLeaf[b]) return {write ? Node(b, c, depth) : Count(b, c, depth), 0u};
+    const BVHNode& k = bvh.nodes[b];
+    if (k.count > 0)  // a binary leaf: its refs in place, sorted by the builder
+      return Leaf(bvh.refs.data() + k.first, k.count, c, write);
     std::vector<std::uint32_t> refs;
-    for (int i = 0; i < nKids; ++i) {
-      if (!asLeaf[kids[i]]) {
-        slot[i] = {Node(kids[i]), 0u};
-        continue;
-      }
-      const BVHNode& k = bvh.nodes[kids[i]];
-      if (k.count > 0) {  // a binary leaf: its refs in place, sorted by the builder
-        slot[i] = Leaf(bvh.refs.data() + k.first, k.count);
-        continue;
-      }
-      refs.clear();
-      SubtreeRefs(kids[i], refs);
-      std::sort(refs.begin(), refs.end());
-      slot[i] = Leaf(refs.data(), static_cast<std::uint32_t>(refs.size()));
+    SubtreeRefs(b, refs);
+    std::sort(refs.begin(), refs.end());
+    return Leaf(refs.data(), static_cast<std::uint32_t>(refs.size()), c, write);
+  }
+
+  static void Advance(Cursor& c, const Cursor& d)
+  {
+    c.node += d.node;
+    c.leaf += d.leaf;
+    for (unsigned k = 0; k < CR_NUM_PRIM_TYPES; ++k) c.pack[k] += d.pack[k];
+  }
+
+  // What the subtrees of the top levels hold (Count, kParallelDepth levels),
+  // so that Node places them without counting again.
+  std::mutex topMutex;
+  std::map<std::uint32_t, Cursor> topCounts;
+
+  // Advances `c` past wide node b's subtree, writing nothing; the top
+  // levels' children counted in parallel.
+  std::uint32_t Count(std::uint32_t b, Cursor& c, int depth)
+  {
+    const auto self = static_cast<std::uint32_t>(c.node);
+    std::uint32_t kids[N];
+    const int nKids = WideKids(b, kids);
+    if (depth > kParallelDepth) {
+      ++c.node;
+      for (int i = 0; i < nKids; ++i) Kid(kids[i], c, depth + 1, false);
+      return self;
     }
-    WideNode<N>& w = out.nodes[self];  // after the recursion: the vector may have grown
+    // Node places the children of nodes above kParallelDepth by these.
+    Cursor d[N];
+    for (int i = 0; i < nKids; ++i) d[i] = Cursor{0, 0, {}};
+    if (depth < kParallelDepth)
+      tbb::parallel_for(0, nKids, [&](int i) { Kid(kids[i], d[i], depth + 1, false); });
+    else
+      for (int i = 0; i < nKids; ++i) Kid(kids[i], d[i], depth + 1, false);
+    Cursor sum{1, 0, {}};
+    for (int i = 0; i < nKids; ++i) Advance(sum, d[i]);
+    {
+      std::lock_guard<std::mutex> lock(topMutex);
+      topCounts[b] = sum;
+    }
+    Advance(c, sum);
+    return self;
+  }
+
+  // Writes wide node b at `c`, then its children's subtrees in order, and
+  // advances `c` past them; b's index. The top levels' children are written
+  // in parallel, each at the place Count found for it.
+  std::uint32_t Node(std::uint32_t b, Cursor& c, int depth)
+  {
+    const std::uint64_t self = c.node++;
+    if (self >= kWideLeafFlag) throw RuntimeError("simd: too many wide nodes for the wide layout");
+    std::uint32_t kids[N];
+    const int nKids = WideKids(b, kids);
+    Slot slot[N];
+    if (depth < kParallelDepth && nKids > 1) {
+      Cursor at[N];
+      for (int i = 0; i < nKids; ++i) {
+        at[i] = c;
+        if (!asLeaf[kids[i]])
+          Advance(c, topCounts.at(kids[i]));
+        else
+          Kid(kids[i], c, depth + 1, false);
+      }
+      tbb::parallel_for(0, nKids, [&](int i) { slot[i] = Kid(kids[i], at[i], depth + 1, true); });
+    } else {
+      for (int i = 0; i < nKids; ++i) slot[i] = Kid(kids[i], c, depth + 1, true);
+    }
+    WideNode<N>& w = out.nodes[self];
     for (int i = 0; i < N; ++i) {
       const bool used = i < nKids;
       for (int a = 0; a < 3; ++a) {
@@ -254,7 +355,25 @@ struct Collapser {
       w.child[i] = used ? slot[i].child : kWideEmptyLeaf;
       w.meta[i] = used ? slot[i].meta : kWideMixedLeaf;
     }
-    return self;
+    return static_cast<std::uint32_t>(self);
+  }
+
+  // Plans, counts, sizes the arrays and writes them.
+  void Run()
+  {
+    Plan();
+    Cursor total;
+    Count(0, total, 0);
+    if (total.node >= kWideLeafFlag || total.leaf >= kWideLeafFlag)
+      throw RuntimeError("simd: too many wide nodes or leaves for the wide layout");
+    out.nodes.resize(total.node);
+    out.leaves.resize(total.leaf);
+    out.leaves[0] = WideLeaf{};  // the empty leaf of unused slots
+#define CR_SIMD_PACK_SIZE_(T, U, a) out.a.resize(total.pack[CR_PRIM_##U]);
+    CR_PRIM_TYPES(CR_SIMD_PACK_SIZE_)
+#undef CR_SIMD_PACK_SIZE_
+    Cursor c;
+    Node(0, c, 0);
   }
 };
 
@@ -264,9 +383,9 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const KernelScene& rows)
   auto out = std::make_unique<WideBVH<N, K>>();
   out->width = N;
   out->packWidth = K;
-  out->leaves.push_back(WideLeaf{});  // leaf 0: the empty leaf of unused slots
   if (bvh.refs.empty()) {
     // No primitives: a root with no children, which no ray enters.
+    out->leaves.push_back(WideLeaf{});  // leaf 0: the empty leaf of unused slots
     WideNode<N> root;
     for (int i = 0; i < N; ++i) {
       for (int a = 0; a < 3; ++a) {
@@ -279,17 +398,8 @@ std::unique_ptr<WideBVHBase> Build(const BVHData& bvh, const KernelScene& rows)
     out->nodes.push_back(root);
     return out;
   }
-  out->nodes.reserve(bvh.nodes.size() / 2 + 1);
-  // The packs grow by push_back: reserved for half-full packs, so that at
-  // 10^7 references they are not copied (and their pages faulted) again and
-  // again as the vectors double.
-#define CR_SIMD_PACK_RESERVE_(T, U, a) \
-  out->a.reserve(2 * (Prim_End(&rows.ranges, CR_PRIM_##U) - rows.ranges.begin[CR_PRIM_##U]) / K + 1);
-  CR_PRIM_TYPES(CR_SIMD_PACK_RESERVE_)
-#undef CR_SIMD_PACK_RESERVE_
-  Collapser<N, K> c{bvh, rows, *out, {}, {}, {}, {}};
-  c.Plan();
-  c.Node(0);
+  Collapser<N, K> c(bvh, rows, *out);
+  c.Run();
   return out;
 }
 

@@ -66,6 +66,9 @@ struct BuildNode {
   std::unique_ptr<BuildNode> kids[2];
   std::uint32_t first = 0, count = 0;
   std::vector<std::uint32_t> ids;  // a leaf's references (spatial-split builds; else refs[first, first + count))
+  // A subtree built flat (Builder::BuildFlat): sub[0] this node, the rest its
+  // descendants, child indices relative to sub.
+  std::vector<BVHNode> sub;
 };
 
 // A reference with its box, moved with it by the partitions (Embree's
@@ -100,20 +103,32 @@ struct Bounds2 {
   }
 };
 
-// The three axes' bins of a node, filled in one pass. A bin's box is
-// written when its first reference arrives (cnt 0 -> 1) and read only where
-// cnt > 0, so a node's bins need no initialisation beyond the counts (3 KB
-// of boxes per node otherwise).
+// The three axes' bins of a node, filled in one pass. `used` has a bit per
+// non-empty bin; a bin's count and box are written when its first reference
+// arrives and read only where its bit is set, so a node's bins need no
+// initialisation beyond three words (3.4 KB of counts and boxes per node
+// otherwise), and the sweeps visit the non-empty bins only: at 10^7
+// references most nodes are small, and their fixed costs were most of the
+// build.
+static_assert(kBins <= 32);
 struct Bins {
   struct Raw {
     F4 lo, hi;
   };
-  std::uint32_t cnt[3][kBins] = {};
+  std::uint32_t used[3] = {0u, 0u, 0u};
+  std::uint32_t cnt[3][kBins];
   Raw bin[3][kBins];
   void Add(int a, int k, F4 lo, F4 hi)
   {
+    const std::uint32_t bit = 1u << k;
     Box b;
-    if (cnt[a][k]++) b = Box{bin[a][k].lo, bin[a][k].hi};
+    if (used[a] & bit) {
+      ++cnt[a][k];
+      b = Box{bin[a][k].lo, bin[a][k].hi};
+    } else {
+      used[a] |= bit;
+      cnt[a][k] = 1;
+    }
     b.Extend(lo, hi);
     bin[a][k] = {b.lo, b.hi};
   }
@@ -121,14 +136,19 @@ struct Bins {
   void Join(const Bins& o)
   {
     for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < kBins; ++b) {
-        if (!o.cnt[a][b]) continue;
+      for (std::uint32_t rest = o.used[a]; rest; rest &= rest - 1u) {
+        const int b = __builtin_ctz(rest);
         Box x;
-        if (cnt[a][b]) x = BoxOf(a, b);
+        if (used[a] & (1u << b)) {
+          x = BoxOf(a, b);
+          cnt[a][b] += o.cnt[a][b];
+        } else {
+          cnt[a][b] = o.cnt[a][b];
+        }
         x.Extend(o.BoxOf(a, b));
         bin[a][b] = {x.lo, x.hi};
-        cnt[a][b] += o.cnt[a][b];
       }
+    for (int a = 0; a < 3; ++a) used[a] |= o.used[a];
   }
 };
 
@@ -232,10 +252,7 @@ struct Builder {
       // only a strictly lower cost replaces the best, so skipping them
       // chooses the same split as sweeping all kBins - 1.
       int used[kBins], m = 0;
-      for (int b = 0; b < kBins; ++b) {  // without a branch: which bins are empty is data
-        used[m] = b;
-        m += cnt[b] != 0;
-      }
+      for (std::uint32_t rest = bins.used[a]; rest; rest &= rest - 1u) used[m++] = __builtin_ctz(rest);
       const auto count = [&](int j) { return cnt[used[j]]; };
       SahSweep(
           m, [&](int j) { return bins.BoxOf(a, used[j]); }, count, count,
@@ -249,22 +266,55 @@ struct Builder {
     }
     if (best.axis >= 0) {
       best.scale = scale[best.axis];
-      for (int b = 0; b < kBins; ++b)
-        if (bins.cnt[best.axis][b]) (b <= best.split ? best.left : best.right).Extend(bins.BoxOf(best.axis, b));
+      for (std::uint32_t rest = bins.used[best.axis]; rest; rest &= rest - 1u) {
+        const int b = __builtin_ctz(rest);
+        (b <= best.split ? best.left : best.right).Extend(bins.BoxOf(best.axis, b));
+      }
     }
     return best;
   }
 
   // Partitions refs[0, n) by the object split; returns the size of the
-  // left side (n / 2, the order kept, when one side would be empty).
-  static std::uint32_t PartitionObject(PrimRef* span, std::uint32_t n, const Box& cb, const ObjectSplit& os)
+  // left side (n / 2, the order kept, when one side would be empty). The
+  // loop is std::partition's (libstdc++'s bidirectional form, and so its
+  // order), gathering the box and centroid box of each side on the way
+  // (`sides`, when given: the children need no pass of their own; `known`
+  // false when a side came out empty).
+  static std::uint32_t PartitionObject(PrimRef* span, std::uint32_t n, const Box& cb, const ObjectSplit& os,
+                                       Bounds2* sides = nullptr, bool* known = nullptr)
   {
-    PrimRef* it = std::partition(span, span + n, [&](const PrimRef& r) {
-      int b = std::min(kBins - 1, static_cast<int>((r.Centroid()[os.axis] - cb.lo[os.axis]) * os.scale));
+    const auto isLeft = [&](const PrimRef& r) {
+      const int b = std::min(kBins - 1, static_cast<int>((r.Centroid()[os.axis] - cb.lo[os.axis]) * os.scale));
       return b <= os.split;
-    });
-    const auto mid = static_cast<std::uint32_t>(it - span);
-    return mid == 0 || mid == n ? n / 2 : mid;
+    };
+    Bounds2 lb, rb;
+    PrimRef* first = span;
+    PrimRef* last = span + n;
+    for (;;) {
+      for (;;) {
+        if (first == last) goto done;
+        if (!isLeft(*first)) break;
+        lb.Add(*first++);
+      }
+      --last;  // *first is a right one
+      for (;;) {
+        if (first == last) {
+          rb.Add(*first);
+          goto done;
+        }
+        if (isLeft(*last)) break;
+        rb.Add(*last--);
+      }
+      std::iter_swap(first, last);
+      lb.Add(*first++);
+      rb.Add(*last);
+    }
+  done:
+    const auto mid = static_cast<std::uint32_t>(first - span);
+    const bool split = mid != 0 && mid != n;
+    if (sides) sides[0] = lb, sides[1] = rb;
+    if (known) *known = split;
+    return split ? mid : n / 2;
   }
 
   // The node's box and centroid box over span[0, n).
@@ -469,21 +519,31 @@ struct Builder {
     return node;
   }
 
-  std::unique_ptr<BuildNode> Build(std::uint32_t begin, std::uint32_t end, int depth)
+  // How refs[begin, end) is cut: its box, and either a leaf (its refs
+  // sorted by id, so each type is one run) or the partition at `mid`.
+  // `sides`: the children's boxes and centroid boxes, when the partition
+  // found them (`known`).
+  struct Step {
+    Box box;
+    bool leaf = false;
+    std::uint32_t mid = 0;
+    Bounds2 sides[2];
+    bool known = false;
+  };
+  // `given`: the node's box and centroid box, when its parent's partition
+  // gathered them.
+  Step Decide(std::uint32_t begin, std::uint32_t end, int depth, const Bounds2* given)
   {
-    auto node = std::make_unique<BuildNode>();
-    ++nodeCount;
+    Step step;
     const std::uint32_t n = end - begin;
-    const Bounds2 nb = NodeBounds(refs.data() + begin, n);
-    node->box = nb.box;
+    const Bounds2 nb = given ? *given : NodeBounds(refs.data() + begin, n);
+    step.box = nb.box;
     const Box& cb = nb.cb;
     auto leaf = [&]() {
-      node->first = begin;
-      node->count = n;
-      // group by type
       std::sort(refs.begin() + begin, refs.begin() + end,
                 [](const PrimRef& x, const PrimRef& y) { return x.Id() < y.Id(); });
-      return std::move(node);
+      step.leaf = true;
+      return step;
     };
     if (n <= 1) return leaf();
 
@@ -502,7 +562,7 @@ struct Builder {
       std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end, byCentroid(axis));
     } else {
       const ObjectSplit os = FindObjectSplit(refs.data() + begin, n, nb);
-      const float parentArea = node->box.Area();
+      const float parentArea = step.box.Area();
       const float leafCost = float(n);
       const float splitCost = parentArea > 0.0f ? 1.0f + os.cost / parentArea : INFINITY;
       if (os.axis < 0 || (n <= static_cast<std::uint32_t>(maxLeaf) && leafCost <= splitCost)) {
@@ -510,17 +570,65 @@ struct Builder {
         mid = begin + n / 2;
         std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end, byCentroid(axis));
       } else {
-        mid = begin + PartitionObject(refs.data() + begin, n, cb, os);
+        mid = begin + PartitionObject(refs.data() + begin, n, cb, os, step.sides, &step.known);
       }
     }
-    if (n > kParallelThreshold) {
-      tbb::parallel_invoke([&] { node->kids[0] = Build(begin, mid, depth + 1); },
-                           [&] { node->kids[1] = Build(mid, end, depth + 1); });
-    } else {
-      node->kids[0] = Build(begin, mid, depth + 1);
-      node->kids[1] = Build(mid, end, depth + 1);
+    step.mid = mid;
+    return step;
+  }
+
+  // The top of the tree (subtrees of more than kParallelThreshold refs) as
+  // BuildNodes, built in parallel; each smaller subtree straight into a flat
+  // array of its own (BuildFlat), in the final layout, which Flatten copies
+  // into place. At 10^7 references a BuildNode per node was 10^7 mallocs,
+  // and their pages, freed again.
+  std::unique_ptr<BuildNode> Build(std::uint32_t begin, std::uint32_t end, int depth, const Bounds2* given)
+  {
+    auto node = std::make_unique<BuildNode>();
+    if (end - begin <= kParallelThreshold) {
+      node->sub.resize(1);
+      std::uint64_t made = 0;
+      BuildFlat(begin, end, depth, given, node->sub, 0, made);
+      nodeCount += made;
+      return node;
     }
+    ++nodeCount;
+    const Step s = Decide(begin, end, depth, given);
+    node->box = s.box;
+    if (s.leaf) {
+      node->first = begin;
+      node->count = end - begin;
+      return node;
+    }
+    tbb::parallel_invoke([&] { node->kids[0] = Build(begin, s.mid, depth + 1, s.known ? &s.sides[0] : nullptr); },
+                         [&] { node->kids[1] = Build(s.mid, end, depth + 1, s.known ? &s.sides[1] : nullptr); });
     return node;
+  }
+
+  // Subtree refs[begin, end) into out[self] and slots appended to `out`,
+  // as Flatten lays nodes out: a node's two children in adjacent new slots,
+  // then the first child's subtree, then the second's.
+  void BuildFlat(std::uint32_t begin, std::uint32_t end, int depth, const Bounds2* given, std::vector<BVHNode>& out,
+                 std::uint32_t self, std::uint64_t& made)
+  {
+    ++made;
+    const Step s = Decide(begin, end, depth, given);
+    BVHNode& node = out[self];
+    for (int a = 0; a < 3; ++a) {
+      node.bmin[a] = s.box.lo[a];
+      node.bmax[a] = s.box.hi[a];
+    }
+    if (s.leaf) {
+      node.first = begin;
+      node.count = end - begin;
+      return;
+    }
+    const auto first = static_cast<std::uint32_t>(out.size());
+    node.first = first;
+    node.count = 0;
+    out.resize(out.size() + 2);  // `node` is not used past this point
+    BuildFlat(begin, s.mid, depth + 1, s.known ? &s.sides[0] : nullptr, out, first, made);
+    BuildFlat(s.mid, end, depth + 1, s.known ? &s.sides[1] : nullptr, out, first + 1, made);
   }
 };
 
@@ -537,9 +645,23 @@ void Store(const BuildNode& b, BVHNode& out)
 // Depth-first flattening: children of node i go to two adjacent new slots.
 // `refs`: where the leaves of a spatial-split build put their ids (else
 // null: the leaves already name their range of the builder's references).
-void Flatten(const BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, AccelInfo& info,
-             std::vector<std::uint32_t>* refs)
+// A subtree built flat, and where Flatten puts it: its root at `self`, its
+// descendants from `base`.
+struct FlatCopy {
+  BuildNode* node;
+  std::uint32_t self, base;
+};
+
+void Flatten(BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, AccelInfo& info,
+             std::vector<std::uint32_t>* refs, std::vector<FlatCopy>& copies)
 {
+  if (!b.sub.empty()) {
+    // Its slots now; its nodes copied afterwards, in parallel (CopyFlat).
+    const auto base = static_cast<std::uint32_t>(nodes.size());
+    copies.push_back({&b, self, base});
+    nodes.resize(base + b.sub.size() - 1);
+    return;
+  }
   Store(b, nodes[self]);
   if (b.count > 0 || !b.kids[0]) {
     ++info.leaves;
@@ -553,8 +675,32 @@ void Flatten(const BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes
   nodes.resize(nodes.size() + 2);
   nodes[self].first = first;
   nodes[self].count = 0;
-  Flatten(*b.kids[0], first, nodes, info, refs);
-  Flatten(*b.kids[1], first + 1, nodes, info, refs);
+  Flatten(*b.kids[0], first, nodes, info, refs, copies);
+  Flatten(*b.kids[1], first + 1, nodes, info, refs, copies);
+}
+
+// The subtrees built flat into their slots, their children's indices moved
+// with them.
+void CopyFlat(const std::vector<FlatCopy>& copies, std::vector<BVHNode>& nodes, AccelInfo& info)
+{
+  std::atomic<std::uint64_t> leaves{0};
+  tbb::parallel_for(std::size_t(0), copies.size(), [&](std::size_t c) {
+    const FlatCopy& fc = copies[c];
+    std::vector<BVHNode>& sub = fc.node->sub;
+    std::uint64_t nLeaves = 0;
+    const auto shift = [&](BVHNode x) {
+      if (x.count > 0)
+        ++nLeaves;
+      else
+        x.first += fc.base - 1u;
+      return x;
+    };
+    nodes[fc.self] = shift(sub[0]);
+    for (std::size_t i = 1; i < sub.size(); ++i) nodes[fc.base + i - 1] = shift(sub[i]);
+    std::vector<BVHNode>().swap(sub);
+    leaves += nLeaves;
+  });
+  info.leaves += leaves.load();
 }
 
 }  // namespace
@@ -603,18 +749,23 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     bld.rootArea = all.box.Area();
     root = bld.BuildSpatial(std::move(bld.refs), 0, kSplitBudget * double(n));
   } else {
-    root = bld.Build(0, n, 0);
+    root = bld.Build(0, n, 0, nullptr);
   }
+  std::vector<FlatCopy> copies;
   out.nodes.reserve(bld.nodeCount.load());
   out.nodes.resize(1);
   if (spatial) {
     out.refs.reserve(n + bld.splitRefs.load());
-    Flatten(*root, 0, out.nodes, info, &out.refs);
+    Flatten(*root, 0, out.nodes, info, &out.refs, copies);
   } else {
-    Flatten(*root, 0, out.nodes, info, nullptr);
+    Flatten(*root, 0, out.nodes, info, nullptr, copies);
     out.refs.resize(n);
-    for (std::uint32_t i = 0; i < n; ++i) out.refs[i] = bld.refs[i].Id();
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 1u << 14),
+                      [&](const tbb::blocked_range<std::uint32_t>& r) {
+                        for (std::uint32_t i = r.begin(); i < r.end(); ++i) out.refs[i] = bld.refs[i].Id();
+                      });
   }
+  CopyFlat(copies, out.nodes, info);
   out.header.nNodes = static_cast<std::uint32_t>(out.nodes.size());
   out.header.nRefs = static_cast<std::uint32_t>(out.refs.size());
   info.nodes = out.nodes.size();
