@@ -146,9 +146,9 @@ struct Collapser {
   // Kept per binary node for the writing walk; the costs C(n, .) and the
   // refs per type live only on the recursion's stack (at 10^7 nodes the
   // arrays of both were 700 MB).
-  NoInitVector<std::uint8_t> choice;     // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
-  NoInitVector<std::uint8_t> rootSplit;  // i of W(n)
-  NoInitVector<std::uint8_t> asLeaf;     // F(n) = L(n)
+  BigVector<std::uint8_t> choice;     // how C(n, j) was reached: 0 n itself, N + 1 as C(n, j - 1), else i
+  BigVector<std::uint8_t> rootSplit;  // i of W(n)
+  BigVector<std::uint8_t> asLeaf;     // F(n) = L(n)
 
   static double Area(const BVHNode& b)
   {

@@ -5,10 +5,10 @@
 #include <cstdint>
 #include <memory>
 #include <type_traits>
-#include <utility>
 #include <vector>
 
 #include "host/accel/accel.h"
+#include "host/core/big_array.h"
 #include "host/scene/scene.h"
 #include "simd/bvh_wide.h"
 #include "simd/prims.h"
@@ -81,40 +81,12 @@ class WideBVHBase {
   int width = 0, packWidth = 0;
 };
 
-// An allocator whose resize() leaves new elements default-initialised
-// (for these plain structs: untouched), so that the collapse's threads,
-// not one resize, first touch the pages of the arrays they fill.
-template <class T>
-struct NoInitAllocator : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = NoInitAllocator<U>;
-  };
-  NoInitAllocator() = default;
-  template <class U>
-  NoInitAllocator(const NoInitAllocator<U>&) noexcept
-  {
-  }
-  template <class U>
-  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>)
-  {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... A>
-  void construct(U* p, A&&... a)
-  {
-    ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
-  }
-};
-template <class T>
-using NoInitVector = std::vector<T, NoInitAllocator<T>>;
-
 template <int N, int K>
 class WideBVH final : public WideBVHBase {
  public:
-  NoInitVector<WideNode<N>> nodes;
-  NoInitVector<WideLeaf> leaves;
-#define CR_SIMD_PACK_ARRAY_(T, U, a) NoInitVector<typename SimdPrim<T>::template Pack<K>> a;  // each type's packs
+  BigVector<WideNode<N>> nodes;
+  BigVector<WideLeaf> leaves;
+#define CR_SIMD_PACK_ARRAY_(T, U, a) BigVector<typename SimdPrim<T>::template Pack<K>> a;  // each type's packs
   CR_PRIM_TYPES(CR_SIMD_PACK_ARRAY_)
 #undef CR_SIMD_PACK_ARRAY_
 

@@ -380,7 +380,7 @@ TEST_CASE("simd: the wide BVH holds every reference once, in packs the slots nam
         const simd::WideLeaf& leaf = sc.wideLeaves[p];
         for (std::uint32_t t = 0; t < CR_NUM_PRIM_TYPES; ++t) packs(t, leaf.first[t], leaf.count[t]);
       }
-      std::vector<std::uint32_t> refs = data.bvh.refs;
+      std::vector<std::uint32_t> refs(data.bvh.refs.begin(), data.bvh.refs.end());
       std::sort(refs.begin(), refs.end());
       std::sort(seen.begin(), seen.end());
       CHECK(seen == refs);

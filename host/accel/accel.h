@@ -10,6 +10,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "host/core/big_array.h"
 #include "kernels/types.h"
 #include "host/scene/scene.h"
 
@@ -82,9 +83,9 @@ struct OctreeData {
 
 struct BVHData {
   BVHHeader header{};
-  std::vector<BVHNode> nodes;
-  std::vector<std::uint32_t> refs;
-  const std::vector<BVHNode>& Nodes() const { return nodes; }
+  BigVector<BVHNode> nodes;  // host/core/big_array.h: huge pages at scale
+  BigVector<std::uint32_t> refs;
+  const BigVector<BVHNode>& Nodes() const { return nodes; }
 };
 
 // Hierarchical grid (kernels/hgrid.h): the root grid, the child grids, and

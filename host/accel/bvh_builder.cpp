@@ -652,8 +652,8 @@ struct FlatCopy {
   std::uint32_t self, base;
 };
 
-void Flatten(BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, AccelInfo& info,
-             std::vector<std::uint32_t>* refs, std::vector<FlatCopy>& copies)
+void Flatten(BuildNode& b, std::uint32_t self, BigVector<BVHNode>& nodes, AccelInfo& info,
+             BigVector<std::uint32_t>* refs, std::vector<FlatCopy>& copies)
 {
   if (!b.sub.empty()) {
     // Its slots now; its nodes copied afterwards, in parallel (CopyFlat).
@@ -681,7 +681,7 @@ void Flatten(BuildNode& b, std::uint32_t self, std::vector<BVHNode>& nodes, Acce
 
 // The subtrees built flat into their slots, their children's indices moved
 // with them.
-void CopyFlat(const std::vector<FlatCopy>& copies, std::vector<BVHNode>& nodes, AccelInfo& info)
+void CopyFlat(const std::vector<FlatCopy>& copies, BigVector<BVHNode>& nodes, AccelInfo& info)
 {
   std::atomic<std::uint64_t> leaves{0};
   tbb::parallel_for(std::size_t(0), copies.size(), [&](std::size_t c) {
