@@ -153,7 +153,7 @@ struct Bins {
 };
 
 struct Builder {
-  std::vector<PrimRef> refs;
+  BigVector<PrimRef> refs;  // not zero-filled: every element is written first
   int maxLeaf = kDefaultLeaf;
   std::atomic<std::uint64_t> nodeCount{0};
   // Spatial-split builds: the scene (to clip primitives), its ranges, the
@@ -747,7 +747,8 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     bld.ranges = scene.Ranges();
     Bounds2 all = bld.NodeBounds(bld.refs.data(), n);
     bld.rootArea = all.box.Area();
-    root = bld.BuildSpatial(std::move(bld.refs), 0, kSplitBudget * double(n));
+    root = bld.BuildSpatial(std::vector<PrimRef>(bld.refs.begin(), bld.refs.end()), 0, kSplitBudget * double(n));
+    BigVector<PrimRef>().swap(bld.refs);
   } else {
     root = bld.Build(0, n, 0, nullptr);
   }
