@@ -65,8 +65,20 @@ std::vector<std::string> Ordered(const json& rows, const char* key, bool (*keep)
 
 bool PivotColumn(const json& r) { return OursRobust(r) || Str(r, "backend") == "embree"; }
 
-std::string Header(const json& res)
+// What the header describes: the main run, or (a --scaling or --hard run
+// on its own) that study, which keeps its machine, command and options in
+// its own section.
+const json& HeaderSource(const json& res)
 {
+  if (!res.contains("machine"))
+    for (const char* study : {"scaling", "hard"})
+      if (res.contains(study) && res[study].is_object() && res[study].contains("machine")) return res[study];
+  return res;
+}
+
+std::string Header(const json& results)
+{
+  const json& res = HeaderSource(results);
   const json& m = res.contains("machine") ? res["machine"] : json::object();
   std::string s = "# cellray bench results\n\n";
   s += fmt::format("- date: {}, commit `{}`\n", Str(m, "date"), Str(m, "git_commit"));
@@ -79,14 +91,14 @@ std::string Header(const json& res)
     s += fmt::format("- rays per set: {}, timed runs per row: {} (median; min and max given), threads: {}\n",
                      Num(o, "rays"), Num(o, "repeat"), Num(o, "threads"));
   }
-  if (res.contains("load_average")) {
+  if (results.contains("load_average")) {
     s += fmt::format("- load average (1 min) at start / end: {} / {} (timings with a load above the core count "
                      "are noise)\n",
-                     F(Num(res["load_average"], "start")), F(Num(res["load_average"], "end")));
+                     F(Num(results["load_average"], "start")), F(Num(results["load_average"], "end")));
   }
-  if (res.contains("wall_s")) s += fmt::format("- wall time of the run: {:.0f} s\n", Num(res, "wall_s"));
-  if (res.contains("notes"))
-    for (const auto& n : res["notes"]) s += fmt::format("- note: {}\n", n.get<std::string>());
+  if (results.contains("wall_s")) s += fmt::format("- wall time of the run: {:.0f} s\n", Num(results, "wall_s"));
+  if (results.contains("notes"))
+    for (const auto& n : results["notes"]) s += fmt::format("- note: {}\n", n.get<std::string>());
   return s + "\n";
 }
 
