@@ -108,16 +108,18 @@ struct Collapser {
     return {kWideLeafFlag | static_cast<std::uint32_t>(index), kWideMixedLeaf};
   }
 
-  // The refs of binary subtree b in one sorted run (a merged leaf).
-  void SubtreeRefs(std::uint32_t b, std::vector<std::uint32_t>& refs) const
+  // The refs of binary subtree b (a merged leaf: at most kMergeRefs) into
+  // refs[m..], on the stack (a vector here was a malloc per merged leaf).
+  void SubtreeRefs(std::uint32_t b, std::uint32_t* refs, std::uint32_t& m) const
   {
     const BVHNode& n = bvh.nodes[b];
     if (n.count > 0) {
-      refs.insert(refs.end(), bvh.refs.begin() + n.first, bvh.refs.begin() + n.first + n.count);
+      if (m + n.count > kMergeRefs) throw RuntimeError("simd: a merged BVH leaf holds too many references");
+      for (std::uint32_t i = 0; i < n.count; ++i) refs[m++] = bvh.refs[n.first + i];
       return;
     }
-    SubtreeRefs(n.first, refs);
-    SubtreeRefs(n.first + 1, refs);
+    SubtreeRefs(n.first, refs, m);
+    SubtreeRefs(n.first + 1, refs, m);
   }
 
   // Optimal collapse (the dynamic programme of Ylitie, Karras & Laine 2017,
@@ -275,10 +277,11 @@ struct Collapser {
     const BVHNode& k = bvh.nodes[b];
     if (k.count > 0)  // a binary leaf: its refs in place, sorted by the builder
       return Leaf(bvh.refs.data() + k.first, k.count, c, write);
-    std::vector<std::uint32_t> refs;
-    SubtreeRefs(b, refs);
-    std::sort(refs.begin(), refs.end());
-    return Leaf(refs.data(), static_cast<std::uint32_t>(refs.size()), c, write);
+    std::uint32_t refs[kMergeRefs], m = 0;
+    SubtreeRefs(b, refs, m);
+    for (std::uint32_t i = 1; i < m; ++i)  // sorted by insertion: at most kMergeRefs
+      for (std::uint32_t j = i; j > 0 && refs[j - 1] > refs[j]; --j) std::swap(refs[j - 1], refs[j]);
+    return Leaf(refs, m, c, write);
   }
 
   static void Advance(Cursor& c, const Cursor& d)
