@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <map>
 #include <mutex>
-#include <cmath>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
