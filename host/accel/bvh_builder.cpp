@@ -71,6 +71,17 @@ struct BuildNode {
   std::vector<BVHNode> sub;
 };
 
+// A node's box, first and count into its BVHNode.
+void StoreNode(const Box& box, std::uint32_t first, std::uint32_t count, BVHNode& out)
+{
+  for (int a = 0; a < 3; ++a) {
+    out.bmin[a] = box.lo[a];
+    out.bmax[a] = box.hi[a];
+  }
+  out.first = first;
+  out.count = count;
+}
+
 // A reference with its box, moved with it by the partitions (Embree's
 // PrimRef): every pass over a node's references reads them in order, not
 // through an index into the scene-sized box array (at 10^7 references that
@@ -428,7 +439,7 @@ struct Builder {
   // Spatial-split build (--bvh-quality high): each node owns its references
   // (a split can put one on both sides, clipped to each); a leaf keeps its
   // ids. `budget`: extra references this subtree may still make.
-  std::unique_ptr<BuildNode> BuildSpatial(std::vector<PrimRef> v, int depth, double budget)
+  std::unique_ptr<BuildNode> BuildSpatial(BigVector<PrimRef> v, int depth, double budget)
   {
     auto node = std::make_unique<BuildNode>();
     ++nodeCount;
@@ -446,7 +457,7 @@ struct Builder {
     const Box& cb = nb.cb;
     const F4 ext = cb.hi - cb.lo;
     const int axis = ext[0] > ext[1] ? (ext[0] > ext[2] ? 0 : 2) : (ext[1] > ext[2] ? 1 : 2);
-    std::vector<PrimRef> left, right;
+    BigVector<PrimRef> left, right;
     bool done = false;
     if (depth < kSahDepth) {
       ObjectSplit os;
@@ -508,7 +519,7 @@ struct Builder {
     const double rest = std::max(0.0, budget - extra);
     const double shareL = rest * double(left.size()) / double(left.size() + right.size());
     const double shareR = rest - shareL;
-    std::vector<PrimRef>().swap(v);
+    BigVector<PrimRef>().swap(v);
     if (n > kParallelThreshold) {
       tbb::parallel_invoke([&] { node->kids[0] = BuildSpatial(std::move(left), depth + 1, shareL); },
                            [&] { node->kids[1] = BuildSpatial(std::move(right), depth + 1, shareR); });
@@ -613,44 +624,29 @@ struct Builder {
   {
     ++made;
     const Step s = Decide(begin, end, depth, given);
-    BVHNode& node = out[self];
-    for (int a = 0; a < 3; ++a) {
-      node.bmin[a] = s.box.lo[a];
-      node.bmax[a] = s.box.hi[a];
-    }
     if (s.leaf) {
-      node.first = begin;
-      node.count = end - begin;
+      StoreNode(s.box, begin, end - begin, out[self]);
       return;
     }
     const auto first = static_cast<std::uint32_t>(out.size());
-    node.first = first;
-    node.count = 0;
-    out.resize(out.size() + 2);  // `node` is not used past this point
+    StoreNode(s.box, first, 0, out[self]);
+    out.resize(out.size() + 2);
     BuildFlat(begin, s.mid, depth + 1, s.known ? &s.sides[0] : nullptr, out, first, made);
     BuildFlat(s.mid, end, depth + 1, s.known ? &s.sides[1] : nullptr, out, first + 1, made);
   }
 };
 
-void Store(const BuildNode& b, BVHNode& out)
-{
-  for (int a = 0; a < 3; ++a) {
-    out.bmin[a] = b.box.lo[a];
-    out.bmax[a] = b.box.hi[a];
-  }
-  out.first = b.first;
-  out.count = b.count;
-}
-
-// Depth-first flattening: children of node i go to two adjacent new slots.
-// `refs`: where the leaves of a spatial-split build put their ids (else
-// null: the leaves already name their range of the builder's references).
 // A subtree built flat, and where Flatten puts it: its root at `self`, its
 // descendants from `base`.
 struct FlatCopy {
   BuildNode* node;
   std::uint32_t self, base;
 };
+
+// Depth-first flattening: children of node i go to two adjacent new slots.
+// `refs`: where the leaves of a spatial-split build put their ids (else
+// null: the leaves already name their range of the builder's references).
+// Subtrees built flat get their slots here and are listed in `copies`.
 
 void Flatten(BuildNode& b, std::uint32_t self, BigVector<BVHNode>& nodes, AccelInfo& info,
              BigVector<std::uint32_t>* refs, std::vector<FlatCopy>& copies)
@@ -662,7 +658,7 @@ void Flatten(BuildNode& b, std::uint32_t self, BigVector<BVHNode>& nodes, AccelI
     nodes.resize(base + b.sub.size() - 1);
     return;
   }
-  Store(b, nodes[self]);
+  StoreNode(b.box, b.first, b.count, nodes[self]);
   if (b.count > 0 || !b.kids[0]) {
     ++info.leaves;
     if (refs) {
@@ -747,8 +743,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     bld.ranges = scene.Ranges();
     Bounds2 all = bld.NodeBounds(bld.refs.data(), n);
     bld.rootArea = all.box.Area();
-    root = bld.BuildSpatial(std::vector<PrimRef>(bld.refs.begin(), bld.refs.end()), 0, kSplitBudget * double(n));
-    BigVector<PrimRef>().swap(bld.refs);
+    root = bld.BuildSpatial(std::move(bld.refs), 0, kSplitBudget * double(n));
   } else {
     root = bld.Build(0, n, 0, nullptr);
   }
