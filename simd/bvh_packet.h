@@ -1,5 +1,7 @@
 // BVH traversal of N coherent rays at once (Wald, Slusallek, Benthin & Wagner
-// 2001, "Interactive rendering with coherent ray tracing"): the packet walks
+// 2001, "Interactive rendering with coherent ray tracing"), for moving scenes
+// (a static scene's packets walk the wide BVH, simd/bvh_wide_packet.h; the
+// primitive tests and the packet loop below serve both): the packet walks
 // the binary BVH of kernels/types.h with one shared stack and a mask of the
 // lanes that entered each node. A node is visited when any of its lanes'
 // slab tests passes; a leaf's primitives are tested for those lanes at once

@@ -161,9 +161,11 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, std::uint32_t p, s
   return changed;
 }
 
-// Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
+// Closest hit (anyHit = 0) or any hit of one ray in the subtree of the slot
+// (ref, meta) (the root: 0, 0); `hit` from Hit_Init or a closer hit so far.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
+CR_SIMD_INLINE void BVHSingle_TraceFrom(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit,
+                                        TraceStatsSum& st, std::uint32_t ref, std::uint32_t meta)
 {
   struct Entry {
     std::uint32_t ref, meta;
@@ -186,7 +188,6 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
   PackRay_Init<K>(pr, ray);
   if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
   pr.anyHit = anyHit != 0;
-  std::uint32_t ref = 0, meta = 0;
   for (;;) {
     if (!(ref & kWideLeafFlag)) {
       const WideNode<N>& n = nodes[ref];
@@ -245,6 +246,13 @@ CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& 
       }
     }
   }
+}
+
+// Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
+template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void BVHSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
+{
+  BVHSingle_TraceFrom<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st, 0u, 0u);
 }
 
 // The lanes of a packet as scalar rays: what Ray_Init makes of each record.

@@ -1,5 +1,6 @@
-// Derived CPU layouts of the BVH for the single-ray SIMD path (the packet
-// path walks the binary BVHNode array of kernels/types.h unchanged).
+// Derived CPU layouts of the BVH for the SIMD paths, single-ray and packet
+// (only a moving scene's packets walk the binary BVHNode array of
+// kernels/types.h).
 //
 // BVH4_CPU / BVH8_CPU: the binary BVH of host/accel/bvh_builder.cpp collapsed
 // into N-wide nodes whose child boxes are stored structure-of-arrays across

@@ -121,11 +121,20 @@ class SimdTracer final : public Tracer {
     const auto t0 = std::chrono::steady_clock::now();
     rows_ = std::make_unique<SimdPrimData>(scene);
     rows_->Bind(sc_);
-    if (variant_ != Variant::Packet && cfg.accel == AccelKind::BVH) {
+    if (cfg.accel == AccelKind::BVH) {
+      // Both variants walk the wide layout; only a moving scene's packets
+      // walk the binary BVH (simd/kernels_motion_bvh.cpp), so a static
+      // scene's binary BVH is freed once collapsed.
       wide_ = BuildWideBVH(data_.bvh, sc_, probes.width, probes.packWidth);
       info_.bytes += wide_->Bytes();
       info_.params += fmt::format(" simd=bvh{}x{} wide_nodes={} wide_bytes={}", probes.width, probes.packWidth,
                                   wide_->Nodes(), wide_->Bytes());
+      if (motion_.empty()) {
+        info_.bytes -= data_.bvh.nodes.size() * sizeof(BVHNode) + data_.bvh.refs.size() * sizeof(std::uint32_t);
+        info_.params += " binary=freed";
+        decltype(data_.bvh.nodes)().swap(data_.bvh.nodes);
+        decltype(data_.bvh.refs)().swap(data_.bvh.refs);
+      }
     }
     info_.bytes += rows_->Bytes();
     info_.buildMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
