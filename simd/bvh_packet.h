@@ -224,23 +224,39 @@ CR_SIMD_INLINE int Packet_Rays(const KernelJob& job, std::size_t p, const RayRec
   return count;
 }
 
+// A packet's hits lane by lane, and back.
+template <int N>
+struct HitLanes {
+  alignas(32) float t[N], u[N], v[N];
+  alignas(32) std::uint32_t g[N];
+  explicit HitLanes(const HitPacket<N>& H)
+  {
+    H.t.Store(t);
+    H.u.Store(u);
+    H.v.Store(v);
+    H.g.Store(g);
+  }
+  void To(HitPacket<N>& H) const
+  {
+    H.t = vfloat<N>::Load(t);
+    H.u = vfloat<N>::Load(u);
+    H.v = vfloat<N>::Load(v);
+    H.g = vint<N>::Load(g);
+  }
+};
+
 // Writes the hits of the first `count` lanes.
 template <int N>
 CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, const KernelJob& job,
                                      const HitPacket<N>& H, const std::uint32_t idx[N], int count)
 {
-  alignas(32) float t[N], u[N], v[N];
-  alignas(32) std::uint32_t g[N];
-  H.t.Store(t);
-  H.u.Store(u);
-  H.v.Store(v);
-  H.g.Store(g);
+  const HitLanes<N> L(H);
   for (int l = 0; l < count; ++l) {
     Hit h;
-    h.t = t[l];
-    h.u = u[l];
-    h.v = v[l];
-    h.g = g[l];
+    h.t = L.t[l];
+    h.u = L.u[l];
+    h.v = L.v[l];
+    h.g = L.g[l];
     job.hits[idx[l]] = Hit_ToRecord(&h, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
   }
 }

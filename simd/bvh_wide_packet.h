@@ -153,37 +153,29 @@ CR_SIMD_INLINE void BVHWidePacket_Trace(const KernelScene& sc, const RayPacket<N
         RayPacket_Extract<N>(P, H, rays);
         raysMade = true;
       }
-      alignas(32) float ht[N], hu[N], hv[N];
-      alignas(32) std::uint32_t hg[N];
-      H.t.Store(ht);
-      H.u.Store(hu);
-      H.v.Store(hv);
-      H.g.Store(hg);
+      HitLanes<N> L(H);
       for (unsigned rest = bits; rest; rest &= rest - 1u) {
         const int l = LowestBit(rest);
         Ray& ray = rays[l];
-        ray.tmax = ht[l];
+        ray.tmax = L.t[l];
         Hit hit;
         Hit_Init(&hit, &ray);
-        hit.t = ht[l];
-        hit.u = hu[l];
-        hit.v = hv[l];
-        hit.g = hg[l];
+        hit.t = L.t[l];
+        hit.u = L.u[l];
+        hit.v = L.v[l];
+        hit.g = L.g[l];
         const std::uint32_t g0 = hit.g;
         const float t0 = hit.t;
         BVHSingle_TraceFrom<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st, ref, meta);
         if (hit.g != g0 || hit.t != t0) {
-          ht[l] = hit.t;
-          hu[l] = hit.u;
-          hv[l] = hit.v;
-          hg[l] = hit.g;
+          L.t[l] = hit.t;
+          L.u[l] = hit.u;
+          L.v[l] = hit.v;
+          L.g[l] = hit.g;
           done |= 1u << l;
         }
       }
-      H.t = vfloat<N>::Load(ht);
-      H.u = vfloat<N>::Load(hu);
-      H.v = vfloat<N>::Load(hv);
-      H.g = vint<N>::Load(hg);
+      L.To(H);
       if (!anyHit) done = 0;
       if (anyHit && (done & activeBits) == activeBits) return;
     } else if (!(ref & kWideLeafFlag)) {
