@@ -12,17 +12,20 @@
 
 #include "host/core/error.h"
 
-// The kernels' plane normal for TrianglePack (the same float operations as
-// the scalar and SIMD kernels: no contraction, top CMakeLists.txt).
+// The kernels' plane normal for TrianglePack's shortest edge (the same float
+// operations as the scalar and SIMD kernels: no contraction, top
+// CMakeLists.txt).
 namespace cr::simd::pack_kernels {
 #include "kernels/triangle.h"
 }  // namespace cr::simd::pack_kernels
 
 namespace cr::simd {
 
-int PackPlaneNormal(const Triangle& t, float n[3])
+int PackShortEdge(const Triangle& t)
 {
-  return pack_kernels::Triangle_PlaneNormal(&t, n);
+  float n[3];
+  const int shared = pack_kernels::Triangle_PlaneNormal(&t, n);  // k's successor
+  return shared == 0 ? 2 : shared - 1;
 }
 
 namespace {

@@ -10,20 +10,18 @@
 
 namespace cr::simd {
 
-// kernels/triangle.h's Triangle_PlaneNormal, compiled with the host's flags
-// (bvh_wide_builder.cpp): the normal into n, the shared vertex returned.
-int PackPlaneNormal(const Triangle& t, float n[3]);
-
-// Pack-only bits of TrianglePack::flags above Triangle.flags' own: which
-// vertex the plane normal's two edges share (Triangle_PlaneNormal: 0, 1, 2).
-inline constexpr std::uint32_t kPackSharedV1 = 1u << 8, kPackSharedV2 = 1u << 9;
+// The plane normal is not stored (48 of 224 bytes a pack): the test
+// computes it from the vertices when a lane passes the edge functions, the
+// shortest edge (Triangle_PlaneNormal's choice) read from two pack-only bits
+// of flags above Triangle.flags' own.
+inline constexpr std::uint32_t kPackShortEdge1 = 1u << 8, kPackShortEdge2 = 1u << 9;
+int PackShortEdge(const Triangle& t);  // Triangle_PlaneNormal's k (bvh_wide_builder.cpp)
 
 template <int K>
-struct TrianglePack {  // 56 K bytes
+struct TrianglePack {  // 44 K bytes
   float v[3][3][K];    // [vertex][axis][lane]
-  float n[3][K];       // the plane normal, Triangle_PlaneNormal's bits
   std::uint32_t g[K];
-  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read) | kPackShared*
+  std::uint32_t flags[K];  // Triangle.flags (the CR_TRI_LONG_* bits are read) | kPackShortEdge*
 };
 
 template <>
@@ -40,13 +38,8 @@ struct SimdPrim<Triangle> {
       p.v[1][a][l] = t.v1[a];
       p.v[2][a][l] = t.v2[a];
     }
-    // The normal depends on the triangle only: computed once here, with the
-    // scalar kernels' float operations (no contraction anywhere: the top
-    // CMakeLists.txt), so the pack test gets Triangle_PlaneTN's bits.
-    float n[3];
-    const int shared = PackPlaneNormal(t, n);
-    for (int a = 0; a < 3; ++a) p.n[a][l] = n[a];
-    p.flags[l] = t.flags | (shared == 1 ? kPackSharedV1 : 0u) | (shared == 2 ? kPackSharedV2 : 0u);
+    const int k = PackShortEdge(t);
+    p.flags[l] = t.flags | (k == 1 ? kPackShortEdge1 : 0u) | (k == 2 ? kPackShortEdge2 : 0u);
   }
 };
 
@@ -78,10 +71,33 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneDivN(const vfloat<N> n[3], const vfloat<N
 }
 
 // The distance along the ray to the triangle's plane, kernels/intersect.h's
-// Triangle_Intersect step for step: the normal from the shortest edge and its
+// Triangle_Intersect step for step, given which edge is the shortest (k0:
+// edge 0, k1: edge 1, else edge 2): the normal from that edge and its
 // successor (edges from the stored vertices), the shared vertex relative to
 // the origin; a plane-parallel ray (n.d == 0) sets `miss`. v0..v2, org, dir
 // in world axis order.
+template <int N>
+CR_SIMD_INLINE vfloat<N> Triangle_PlaneKN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
+                                          vbool<N> k0, vbool<N> k1, const vfloat<N> org[3], const vfloat<N> dir[3],
+                                          vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax, vbool<N>& nearPlane)
+{
+  // Edge k, its successor, and the vertex they share:
+  // k 0: e0, e1, v1; k 1: e1, e2, v2; k 2: e2, e0, v0.
+  vfloat<N> ea[3], eb[3], p[3];
+  for (int i = 0; i < 3; ++i) {
+    const vfloat<N> e0 = v1[i] - v0[i], e1 = v2[i] - v1[i], e2 = v0[i] - v2[i];
+    ea[i] = Select(k0, e0, Select(k1, e1, e2));
+    eb[i] = Select(k0, e1, Select(k1, e2, e0));
+    p[i] = Select(k0, v1[i] - org[i], Select(k1, v2[i] - org[i], v0[i] - org[i]));
+  }
+  vfloat<N> n[3];
+  n[0] = ea[1] * eb[2] - ea[2] * eb[1];
+  n[1] = ea[2] * eb[0] - ea[0] * eb[2];
+  n[2] = ea[0] * eb[1] - ea[1] * eb[0];
+  return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
+}
+
+// The same, the shortest edge found as Triangle_PlaneNormal finds it.
 template <int N>
 CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N> v1[3], const vfloat<N> v2[3],
                                           const vfloat<N> org[3], const vfloat<N> dir[3], vbool<N>& miss,
@@ -97,19 +113,7 @@ CR_SIMD_INLINE vfloat<N> Triangle_PlaneTN(const vfloat<N> v0[3], const vfloat<N>
   // k = (l0 <= l1) ? ((l0 <= l2) ? 0 : 2) : ((l1 <= l2) ? 1 : 2)
   const vbool<N> k0 = (l0 <= l1) & (l0 <= l2);
   const vbool<N> k1 = AndNot(l1 <= l2, l0 <= l1);
-  // k == 2 otherwise. Edge k, its successor, and the vertex they share:
-  // k 0: e0, e1, v1; k 1: e1, e2, v2; k 2: e2, e0, v0.
-  vfloat<N> ea[3], eb[3], p[3];
-  for (int i = 0; i < 3; ++i) {
-    ea[i] = Select(k0, e0[i], Select(k1, e1[i], e2[i]));
-    eb[i] = Select(k0, e1[i], Select(k1, e2[i], e0[i]));
-    p[i] = Select(k0, v1[i] - org[i], Select(k1, v2[i] - org[i], v0[i] - org[i]));
-  }
-  vfloat<N> n[3];
-  n[0] = ea[1] * eb[2] - ea[2] * eb[1];
-  n[1] = ea[2] * eb[0] - ea[0] * eb[2];
-  n[2] = ea[0] * eb[1] - ea[1] * eb[0];
-  return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
+  return Triangle_PlaneKN<N>(v0, v1, v2, k0, k1, org, dir, miss, tmin, tmax, nearPlane);
 }
 
 // Triangle_PlaneTN for one triangle against N rays (packets): the normal
@@ -161,22 +165,19 @@ struct VecPlane {
 template <int N>
 struct PackPlane {
   const float (&pv)[3][3][N];
-  const float (&pn)[3][N];
   const std::uint32_t (&flags)[N];
-  // Triangle_PlaneTN with the pack's stored normal and shared vertex.
+  // Triangle_PlaneTN from the pack's vertices and shortest edges.
   vfloat<N> T(const vfloat<N>* org, const vfloat<N>* dir, vbool<N>& miss, vfloat<N> tmin, vfloat<N> tmax,
               vbool<N>& nearPlane) const
   {
     const vint<N> fl = vint<N>::Load(flags);
-    const vbool<N> s1 = vbool<N>::FromBits(MaskedLanes(fl, kPackSharedV1));
-    const vbool<N> s2 = vbool<N>::FromBits(MaskedLanes(fl, kPackSharedV2));
-    vfloat<N> n[3], p[3];
-    for (int i = 0; i < 3; ++i) {
-      n[i] = vfloat<N>::Load(pn[i]);
-      p[i] = Select(s1, vfloat<N>::Load(pv[1][i]), Select(s2, vfloat<N>::Load(pv[2][i]), vfloat<N>::Load(pv[0][i]))) -
-             org[i];
-    }
-    return Triangle_PlaneDivN<N>(n, p, dir, miss, tmin, tmax, nearPlane);
+    const vbool<N> k1 = vbool<N>::FromBits(MaskedLanes(fl, kPackShortEdge1));
+    const vbool<N> k2 = vbool<N>::FromBits(MaskedLanes(fl, kPackShortEdge2));
+    const vbool<N> k0 = !(k1 | k2);
+    vfloat<N> v[3][3];
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) v[j][i] = vfloat<N>::Load(pv[j][i]);
+    return Triangle_PlaneKN<N>(v[0], v[1], v[2], k0, k1, org, dir, miss, tmin, tmax, nearPlane);
   }
   unsigned LongEdgeLanes() const { return MaskedLanes(vint<N>::Load(flags), CR_TRI_LONG_EDGES); }
   unsigned FlagLanes(std::uint32_t bit) const { return MaskedLanes(vint<N>::Load(flags), bit); }
@@ -188,7 +189,7 @@ struct PackPlane {
       t.v1[i] = pv[1][i][l];
       t.v2[i] = pv[2][i][l];
     }
-    t.flags = flags[l] & ~(kPackSharedV1 | kPackSharedV2);
+    t.flags = flags[l] & ~(kPackShortEdge1 | kPackShortEdge2);
     return t;
   }
 };
@@ -456,7 +457,7 @@ struct SimdTest<Triangle> {
         B[j] = vfloat<K>::Load(pk.v[1][pr.k[j]]) - pr.orgK[j];
         C[j] = vfloat<K>::Load(pk.v[2][pr.k[j]]) - pr.orgK[j];
       }
-      return Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.n, pk.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u,
+      return Triangle_WatertightN<K>(A, B, C, pr.s, PackPlane<K>{pk.v, pk.flags}, pr.org, pr.dir, pr.tmin, tmax, t, u,
                                      v, valid);
     }
   }
