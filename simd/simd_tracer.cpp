@@ -165,7 +165,7 @@ class SimdTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());
@@ -394,7 +394,7 @@ class DelegatingTracer final : public Tracer {
     info_ = inner_->Info();
   }
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     inner_->Trace(rays, times, hits, occlusion, stats);

@@ -56,7 +56,7 @@ class MultiDeviceTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     const std::size_t n = rays.size(), d = members_.size();

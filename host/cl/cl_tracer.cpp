@@ -85,7 +85,7 @@ class ClTracer final : public Tracer {
   void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     Built& p = Program(occlusion, false);

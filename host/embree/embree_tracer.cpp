@@ -69,7 +69,7 @@ class EmbreeTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());

@@ -37,7 +37,7 @@ BandPlanTracer::BandPlanTracer(const Scene& scene, std::unique_ptr<Tracer> inner
   }
 }
 
-void BandPlanTracer::Trace(RaySpan rays, TimeSpan times,
+void BandPlanTracer::TraceRays(RaySpan rays, TimeSpan times,
                            std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
 {
   inner_->Trace(rays, times, hits, occlusion, stats);

@@ -33,7 +33,7 @@ void to_json(nlohmann::json& j, const BandPlan& p);
 class BandPlanTracer : public Tracer {
  public:
   BandPlanTracer(const Scene& scene, std::unique_ptr<Tracer> inner, const CameraFrame& frame, const std::vector<int>& ranks);
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override;
   using Tracer::Trace;
   std::string DeviceName() const override { return inner_->DeviceName(); }

@@ -415,7 +415,7 @@ BandTracer::BandTracer(const Scene& scene, const TraceConfig& config, const Band
 
 BandTracer::~BandTracer() = default;
 
-void BandTracer::Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+void BandTracer::TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
                        bool occlusion, TraceStatsSum* stats)
 {
   (void)stats;

@@ -90,7 +90,7 @@ class BandTracer : public Tracer {
   // accel) over the pieces of its wedge.
   BandTracer(const Scene& scene, const TraceConfig& config, const BandWedges& wedges);
   ~BandTracer() override;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override;
   using Tracer::Trace;
   // Collective: serves other ranks' rays until every rank has called it.

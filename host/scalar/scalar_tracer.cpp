@@ -34,7 +34,7 @@ class ScalarTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     hits.resize(rays.size());

@@ -12,8 +12,17 @@
 #include "host/cl/cl_device.h"
 #include "host/core/error.h"
 #include "host/reference/reference.h"
+#include "host/trace/direction_scale.h"
 
 namespace cr {
+
+void Tracer::Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
+{
+  const DirectionScale scale(rays);
+  TraceRays(scale.Rays(), times, hits, occlusion, stats);
+  scale.Unscale(hits, occlusion);
+}
+
 
 void AddStats(TraceStatsSum& sum, const TraceStatsSum& s)
 {
@@ -135,7 +144,7 @@ class ReferenceBackend final : public Tracer {
     info_.params = "fp64 median-split bvh";
   }
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum*) override
   {
     hits.resize(rays.size());
@@ -188,7 +197,7 @@ class FallbackTracer final : public Tracer {
   }
 
   using Tracer::Trace;
-  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
+  void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
     // Counters of a failed OpenCL call are not added: stats->Add happens

@@ -81,9 +81,10 @@ class Tracer {
   // hits[i] answers rays[i] (closest hit, or occlusion per FORMATS.md) at
   // time times[i] in the shutter interval [0, 1] (motion blur; `times` empty:
   // every ray at time 0, as a CRRAYS01 file's rays are). stats is filled
-  // only when the tracer was created with stats on.
-  virtual void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
-                     bool occlusion, TraceStatsSum* stats) = 0;
+  // only when the tracer was created with stats on. Rays whose direction is
+  // too short or too long for float products reach the backend scaled by a
+  // power of two, their hits' t scaled back (host/trace/direction_scale.h).
+  void Trace(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats);
   void Trace(RaySpan rays, std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
   {
     Trace(rays, NoTimes(), hits, occlusion, stats);
@@ -123,6 +124,10 @@ class Tracer {
   virtual double LastKernelMs() const { return -1.0; }
 
  protected:
+  // The backend's Trace, of rays whose directions are in range.
+  virtual void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits, bool occlusion,
+                         TraceStatsSum* stats) = 0;
+
   AccelInfo info_;
   Backend backend_ = Backend::Scalar;  // set by CreateTracer
 

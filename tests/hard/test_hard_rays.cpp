@@ -23,7 +23,7 @@ hard::HardCase Make(const std::string& name)
 
 }  // namespace
 
-TEST_CASE("hard: axis-parallel and near-axis rays (+-0, +-1e-30, +-1e-7, subnormal components)")
+TEST_CASE("hard: axis-parallel and near-axis rays (+-0, +-1e-30, +-1e-7, subnormal components, directions of length 1e-30 to 1e30)")
 {
   hard_test::RunAndCheck("axis/");
   const hard::HardCase c = Make("axis/zero-and-tiny");

@@ -4,7 +4,8 @@
 // leading coefficient), through the centres, rims, vertices, edge midpoints
 // and axes of spheres, triangles and cones, and from random origins. A
 // second case uses subnormal components (1e-40, 1.4e-45: 1/d overflows to
-// inf in float, and a device may flush them to zero).
+// inf in float, and a device may flush them to zero); a third scales whole
+// directions to lengths from 1e-30 to 1e30.
 #include <cmath>
 
 #include "tests/hard/gen/hard_gen.h"
@@ -99,6 +100,17 @@ HardCase AxisCase(const char* name, const std::vector<float>& tiny, const GenOpt
   return c;
 }
 
+// AxisCase's rays with each whole direction multiplied by one of `factors`
+// in turn: directions of length 1e-30 (d.d is 0 in float) up to 1e30 (d.d
+// overflows).
+HardCase ScaledAxisCase(const char* name, const std::vector<float>& factors, const GenOptions& o, std::uint64_t seed)
+{
+  HardCase c = AxisCase(name, {0.0f, -0.0f, 1e-7f, -1e-7f}, o, seed);
+  for (std::size_t i = 0; i < c.rays.size(); ++i)
+    for (float& d : c.rays[i].dir) d *= factors[i % factors.size()];
+  return c;
+}
+
 }  // namespace
 
 void AddAxisCases(std::vector<CaseSpec>& specs)
@@ -117,6 +129,16 @@ void AddAxisCases(std::vector<CaseSpec>& specs)
                    "zero. Expect: the reference's answer.",
                    false, [](AccelKind, const GenOptions& o) {
                      return AxisCase("axis/subnormal", {1e-40f, -1e-40f, 1.4e-45f, -1.4e-45f, 1e-38f, -1e-38f}, o, 303);
+                   }});
+  specs.push_back({"axis/scaled-directions", "axis",
+                   "The same scene, rays with a main component +-1 and the other two drawn from {+0, -0, +-1e-7}, "
+                   "each whole direction then multiplied by one of 1e-30, 1e-20, 1e-12, 1e12, 1e20, 1e30: a "
+                   "direction of length 1e-30 has d.d = 0 in float, one of 1e30 d.d = inf (the backends trace "
+                   "such rays scaled by a power of two, host/trace/direction_scale.h). Expect: the reference's "
+                   "answer.",
+                   false, [](AccelKind, const GenOptions& o) {
+                     return ScaledAxisCase("axis/scaled-directions", {1e-30f, 1e-20f, 1e-12f, 1e12f, 1e20f, 1e30f}, o,
+                                           304);
                    }});
 }
 
