@@ -1,6 +1,9 @@
 #include "host/trace/direction_scale.h"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include <tbb/parallel_reduce.h>
 #include <tbb/blocked_range.h>
@@ -10,16 +13,19 @@ namespace cr {
 namespace {
 
 // e with the direction's largest component in [2^e, 2^(e + 1)) when it lies
-// outside the range, else 0: d' = d 2^-e has its largest component in
-// [1, 2).
+// outside the range, else 0 (also for a zero, infinite or NaN direction:
+// traced as they are): d' = d 2^-e has its largest component in [1, 2).
+// Bit operations only (the scan runs over every ray of every trace): the
+// largest |component|'s bits are the largest as integers.
 int ScaleExponent(const RayRecord& r)
 {
-  const float m = std::fmax(std::fabs(r.dir[0]), std::fmax(std::fabs(r.dir[1]), std::fabs(r.dir[2])));
-  if (!(m > 0.0f) || !std::isfinite(m)) return 0;  // zero, NaN or infinite: as they are
-  int e = 0;
-  std::frexp(m, &e);  // m = f 2^e, f in [0.5, 1)
-  const int lead = e - 1;  // m in [2^lead, 2^(lead + 1))
-  return (lead < -kDirectionScaleBits || lead > kDirectionScaleBits) ? lead : 0;
+  const auto absBits = [](float f) { return std::bit_cast<std::uint32_t>(f) & 0x7fffffffu; };
+  const std::uint32_t m = std::max(absBits(r.dir[0]), std::max(absBits(r.dir[1]), absBits(r.dir[2])));
+  const int biased = static_cast<int>(m >> 23);
+  if (biased >= 127 - kDirectionScaleBits && biased <= 127 + kDirectionScaleBits) return 0;
+  if (m == 0u || biased == 255) return 0;
+  // Subnormal: the value is m 2^-149.
+  return biased > 0 ? biased - 127 : (31 - std::countl_zero(m)) - 149;
 }
 
 }  // namespace
