@@ -5,7 +5,9 @@ and the table gives the median trace time of each and their ratio (new / base;
 below 1 means the new build is faster), with the geometric mean per
 configuration and overall. Answers are compared too: the .hits of the two
 builds must be identical unless --allow-diff is given (a change that moves
-answers then has the count of differing records in each row).
+answers then has the count of differing records in each row). Shadow rays
+are occlusion queries, whose records name some occluder: there the same rays
+must be occluded, by any primitive.
 
   bench/ab_speed.py --base OTHER/build/release/bin/cellray [--new build/release/bin/cellray]
                     [--scenes balls,gears,...] [--kinds primary,shadow,diffuse]
@@ -28,6 +30,11 @@ import tempfile
 from benchlib import ROOT, run
 
 SPD7 = ["balls", "gears", "mount", "rings", "teapot", "tetra", "tree"]
+
+
+def Occluded(hits, offset):
+    """Whether the .hits record at byte `offset` has an occluder (prim != CR_NO_HIT)."""
+    return hits[offset + 4:offset + 8] != b"\xff\xff\xff\xff"
 
 
 def main():
@@ -77,8 +84,14 @@ def main():
                             with open(out, "rb") as f:
                                 hits[name] = f.read()
                     hb, hn = hits["base"], hits["new"]
-                    ndiff = sum(hb[i:i + 16] != hn[i:i + 16] for i in range(16, min(len(hb), len(hn)), 16))
-                    same = hb == hn
+                    if occ:
+                        # An occlusion record names some occluder (FORMATS.md):
+                        # the same rays must be occluded, by any primitive.
+                        ndiff = sum(Occluded(hb, i) != Occluded(hn, i) for i in range(16, min(len(hb), len(hn)), 16))
+                        same = len(hb) == len(hn) and ndiff == 0
+                    else:
+                        ndiff = sum(hb[i:i + 16] != hn[i:i + 16] for i in range(16, min(len(hb), len(hn)), 16))
+                        same = hb == hn
                     if not same and not a.allow_diff:
                         raise SystemExit(f"ab_speed: {scene} {kind} {cfg}: the two builds answer {ndiff} rays "
                                          "differently (--allow-diff to time them anyway)")

@@ -16,6 +16,7 @@
 
 #include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
+#include <cstddef>
 
 namespace cr::simd::CR_SIMD_NS {
 
@@ -161,6 +162,39 @@ CR_SIMD_INLINE bool WideLeaf_Intersect(const KernelScene& sc, std::uint32_t p, s
   return changed;
 }
 
+// Asks the cache for the slot's data (a wide node, or a one-type leaf's
+// first packs) ahead of its visit: a ray that enters several children walks
+// the nearest first, while the others' lines arrive (incoherent rays miss
+// the cache on nearly every node and leaf).
+template <int N, int K, unsigned kTypes>
+CR_SIMD_INLINE void WideSlot_Prefetch(const KernelScene& sc, const WideNode<N>* nodes, std::uint32_t ref,
+                                      std::uint32_t meta)
+{
+  const char* a;
+  int bytes;
+  if (!(ref & kWideLeafFlag)) {
+    a = reinterpret_cast<const char*>(nodes + ref);
+    bytes = static_cast<int>(sizeof(WideNode<N>));
+  } else {
+    if (meta == kWideMixedLeaf) return;
+    const std::uint32_t type = (meta >> 16) - 1u;
+    const int packs = static_cast<int>(meta & 0xffffu) < 2 ? static_cast<int>(meta & 0xffffu) : 2;
+    a = nullptr;
+    bytes = 0;
+#define CR_SIMD_LEAF_PREFETCH_(T, U, x)                                                             \
+  if constexpr ((kTypes >> CR_PRIM_##U) & 1u)                                                       \
+    if (type == CR_PRIM_##U) {                                                                      \
+      using Pack = typename SimdPrim<T>::template Pack<K>;                                          \
+      a = reinterpret_cast<const char*>(static_cast<const Pack*>(sc.packs[CR_PRIM_##U]) + (ref & ~kWideLeafFlag)); \
+      bytes = packs * static_cast<int>(sizeof(Pack));                                               \
+    }
+    CR_PRIM_TYPES(CR_SIMD_LEAF_PREFETCH_)
+#undef CR_SIMD_LEAF_PREFETCH_
+  }
+  for (int o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
+  if (bytes) __builtin_prefetch(a + bytes - 1);
+}
+
 // Closest hit (anyHit = 0) or any hit of one ray in the subtree of the slot
 // (ref, meta) (the root: 0, 0); `hit` from Hit_Init or a closer hit so far.
 template <int N, int K, unsigned kTypes, bool kFast, bool kStats>
@@ -175,13 +209,20 @@ CR_SIMD_INLINE void BVHSingle_TraceFrom(const KernelScene& sc, const Ray& ray, H
   // the binary depth bound.
   Entry stack[(N - 1) * kBVHStack + 1];
   int sp = 0;
+  // Closest hit: children nearest first. Any hit: in slot order (the
+  // query ends at any occluder; sorting cost more than it found sooner).
+  const bool sorted = !anyHit;
   const WideNode<N>* nodes = static_cast<const WideNode<N>*>(sc.wideNodes);
   vfloat<N> org[3], inv[3];
-  int nearHi[3];
+  // Byte offsets of the near and far planes of each axis in a node, chosen
+  // once per ray (no per-node branch on the direction's signs).
+  std::size_t nearOff[3], farOff[3];
   for (int a = 0; a < 3; ++a) {
     org[a] = vfloat<N>(ray.org[a]);
     inv[a] = vfloat<N>(ray.inv[a]);
-    nearHi[a] = ray.inv[a] < 0.0f;
+    const bool hi = ray.inv[a] < 0.0f;
+    nearOff[a] = (hi ? offsetof(WideNode<N>, upper) : offsetof(WideNode<N>, lower)) + a * N * sizeof(float);
+    farOff[a] = (hi ? offsetof(WideNode<N>, lower) : offsetof(WideNode<N>, upper)) + a * N * sizeof(float);
   }
   const vfloat<N> tmin(ray.tmin);
   PackRayOf<K, kHasMotion<kTypes>> pr;
@@ -194,9 +235,10 @@ CR_SIMD_INLINE void BVHSingle_TraceFrom(const KernelScene& sc, const Ray& ray, H
       if constexpr (kStats) ++st.nTS;
       const float* nearP[3];
       const float* farP[3];
+      const char* nb = reinterpret_cast<const char*>(&n);
       for (int a = 0; a < 3; ++a) {
-        nearP[a] = nearHi[a] ? n.upper[a] : n.lower[a];
-        farP[a] = nearHi[a] ? n.lower[a] : n.upper[a];
+        nearP[a] = reinterpret_cast<const float*>(nb + nearOff[a]);
+        farP[a] = reinterpret_cast<const float*>(nb + farOff[a]);
       }
       vfloat<N> tE;
       unsigned bits = Box_IntersectBoxes<kFast, N>(nearP, farP, org, inv, tmin, vfloat<N>(CullDistance<kFast>(hit.t)), tE).Bits();
@@ -208,16 +250,19 @@ CR_SIMD_INLINE void BVHSingle_TraceFrom(const KernelScene& sc, const Ray& ray, H
           meta = n.meta[i0];
           continue;
         }
-        // Two or more: push all, farthest deepest, and continue with the nearest.
+        // Two or more: push all, farthest deepest, and continue with the
+        // nearest; each asked of the cache now, while the nearest is walked.
         alignas(32) float te[N];
         tE.Store(te);
         const int base = sp;
+        WideSlot_Prefetch<N, K, kTypes>(sc, nodes, n.child[i0], n.meta[i0]);
         stack[sp++] = {n.child[i0], n.meta[i0], te[i0]};
         do {
           const int i = LowestBit(bits);
           bits &= bits - 1;
+          WideSlot_Prefetch<N, K, kTypes>(sc, nodes, n.child[i], n.meta[i]);
           int j = sp++;
-          while (j > base && stack[j - 1].t < te[i]) {
+          while (sorted && j > base && stack[j - 1].t < te[i]) {
             stack[j] = stack[j - 1];
             --j;
           }

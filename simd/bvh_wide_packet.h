@@ -235,7 +235,10 @@ CR_SIMD_INLINE void BVHWidePacket_Trace(const KernelScene& sc, const RayPacket<N
         key[j] = d;
       }
       if (nk > 0) {
-        for (int j = 0; j < nk - 1; ++j) stack[sp++] = kid[j];
+        for (int j = 0; j < nk - 1; ++j) {
+          WideSlot_Prefetch<N, K, kTypes>(sc, nodes, kid[j].ref, kid[j].meta);
+          stack[sp++] = kid[j];
+        }
         ref = kid[nk - 1].ref;
         meta = kid[nk - 1].meta;
         bits = kid[nk - 1].bits;
