@@ -397,7 +397,7 @@ class DelegatingTracer final : public Tracer {
   void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
              bool occlusion, TraceStatsSum* stats) override
   {
-    inner_->Trace(rays, times, hits, occlusion, stats);
+    TraceInRange(*inner_, rays, times, hits, occlusion, stats);
   }
   std::string DeviceName() const override { return inner_->DeviceName(); }
   std::string VariantName() const override { return fmt::format("scalar ray ({})", why_); }

@@ -62,7 +62,7 @@ class MultiDeviceTracer final : public Tracer {
     const std::size_t n = rays.size(), d = members_.size();
     hits.resize(n);
     if (d == 1) {
-      members_[0]->Trace(rays, times, hits, occlusion, stats);
+      TraceInRange(*members_[0], rays, times, hits, occlusion, stats);
       ++sliced_[0];
       return;
     }
@@ -80,7 +80,7 @@ class MultiDeviceTracer final : public Tracer {
         const std::size_t b = s * slice, e = std::min(n, b + slice);
         r.assign(rays.begin() + std::ptrdiff_t(b), rays.begin() + std::ptrdiff_t(e));
         if (!times.empty()) t.assign(times.begin() + std::ptrdiff_t(b), times.begin() + std::ptrdiff_t(e));
-        members_[k]->Trace(r, t, h, occlusion, stats ? &part[k] : nullptr);
+        TraceInRange(*members_[k], r, t, h, occlusion, stats ? &part[k] : nullptr);
         std::copy(h.begin(), h.end(), hits.begin() + std::ptrdiff_t(b));
         ++sliced_[k];
       }

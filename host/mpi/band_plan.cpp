@@ -40,11 +40,11 @@ BandPlanTracer::BandPlanTracer(const Scene& scene, std::unique_ptr<Tracer> inner
 void BandPlanTracer::TraceRays(RaySpan rays, TimeSpan times,
                            std::vector<HitRecord>& hits, bool occlusion, TraceStatsSum* stats)
 {
-  inner_->Trace(rays, times, hits, occlusion, stats);
+  TraceInRange(*inner_, rays, times, hits, occlusion, stats);
   const std::vector<HitRecord>* stop = &hits;
   if (occlusion) {
     // The nearest blocker, where the shadow ray's run stops.
-    inner_->Trace(rays, times, nearest_, false, nullptr);
+    TraceInRange(*inner_, rays, times, nearest_, false, nullptr);
     stop = &nearest_;
   }
   for (BandPlan& p : plans_) {

@@ -202,7 +202,7 @@ class FallbackTracer final : public Tracer {
   {
     // Counters of a failed OpenCL call are not added: stats->Add happens
     // only after its last step, the read-back.
-    Guard([&] { Active().Trace(rays, times, hits, occlusion, stats); });
+    Guard([&] { TraceInRange(Active(), rays, times, hits, occlusion, stats); });
   }
   void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
                     TraceStatsSum* stats) override

@@ -127,6 +127,13 @@ class Tracer {
   // The backend's Trace, of rays whose directions are in range.
   virtual void TraceRays(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits, bool occlusion,
                          TraceStatsSum* stats) = 0;
+  // A wrapper's call of its inner tracer, on rays its own Trace has already
+  // brought in range (no second scan of the directions).
+  static void TraceInRange(Tracer& inner, RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits, bool occlusion,
+                           TraceStatsSum* stats)
+  {
+    inner.TraceRays(rays, times, hits, occlusion, stats);
+  }
 
   AccelInfo info_;
   Backend backend_ = Backend::Scalar;  // set by CreateTracer
