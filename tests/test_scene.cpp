@@ -6,10 +6,12 @@
 
 #include "host/core/error.h"
 #include "host/core/file_util.h"
+#include "host/scene/generate.h"
 #include "host/scene/triangulate.h"
 #include "tests/test_util.h"
 
 using namespace cr;
+using namespace cr::test;
 
 namespace {
 
@@ -273,4 +275,60 @@ TEST_CASE("NFF box statement (extension): layout, ids among the other statements
   CHECK(b.lo == glm::vec3(-1, -2, -3));
   CHECK(b.hi == glm::vec3(1, 2, 3));
   CHECK(s.CountKind(PrimKind::kShape, CR_PRIM_BOX) == 2);
+}
+
+TEST_CASE("SubdivideMesh: exact triangle counts on the same surface (area, bounds, primary hits)")
+{
+  const Scene& tetra = CachedScene(SpdPath("tetra"));
+  const std::uint64_t n0 = tetra.triangles.size();
+  REQUIRE(n0 == 4096);
+  const auto area = [](const Scene& s) {
+    double a = 0.0;
+    for (const Triangle& t : s.triangles) {
+      const glm::dvec3 v0(t.v0[0], t.v0[1], t.v0[2]), v1(t.v1[0], t.v1[1], t.v1[2]), v2(t.v2[0], t.v2[1], t.v2[2]);
+      a += 0.5 * glm::length(glm::cross(v1 - v0, v2 - v0));
+    }
+    return a;
+  };
+  const auto bounds = [](const Scene& s) {
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (const Triangle& t : s.triangles)
+      for (const float* v : {t.v0, t.v1, t.v2}) {
+        lo = glm::min(lo, glm::vec3(v[0], v[1], v[2]));
+        hi = glm::max(hi, glm::vec3(v[0], v[1], v[2]));
+      }
+    return std::make_pair(lo, hi);
+  };
+  const double a0 = area(tetra);
+  TraceConfig config;
+  config.backend = Backend::Scalar;
+  const std::vector<RayRecord> rays = MakeRays(tetra, RayKind::Primary, 96);
+  std::vector<HitRecord> h0;
+  CreateTracer(tetra, config)->Trace(rays, h0, false, nullptr);
+  for (const std::uint64_t n : {n0, 4 * n0, 4 * n0 + 777, 16 * n0 + 5}) {
+    CAPTURE(n);
+    const Scene s = SubdivideMesh(tetra, n);
+    CHECK(s.triangles.size() == n);
+    CHECK(s.NumPrims() == n);
+    CHECK(std::abs(area(s) - a0) <= 1e-5 * a0);
+    // Midpoints of float vertices, rounded to float, stay within them.
+    CHECK(bounds(s) == bounds(tetra));
+    CHECK(s.camera.from == tetra.camera.from);
+    // The same surface: the same rays hit it, at the same distance.
+    std::vector<HitRecord> h;
+    CreateTracer(s, config)->Trace(rays, h, false, nullptr);
+    REQUIRE(h.size() == h0.size());
+    std::size_t status = 0, far = 0, hits = 0;
+    for (std::size_t i = 0; i < h.size(); ++i) {
+      const bool a = h0[i].prim != CR_NO_HIT, b = h[i].prim != CR_NO_HIT;
+      status += a != b;
+      hits += a;
+      if (a && b) far += std::abs(h[i].t - h0[i].t) > 1e-5f * h0[i].t;
+    }
+    CHECK(hits > rays.size() / 8);
+    CHECK(status <= rays.size() / 500);
+    CHECK(far == 0);
+  }
+  CHECK_THROWS_AS(SubdivideMesh(tetra, n0 - 1), InputError);
+  CHECK_THROWS_AS(SubdivideMesh(CachedScene(SpdPath("balls")), 100000), InputError);
 }

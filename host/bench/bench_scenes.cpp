@@ -15,6 +15,8 @@ namespace cr::bench {
 namespace {
 // The kinds LoadBenchScene generates (gen:KIND:N).
 const std::string_view kGenKinds[] = {"sphereflake", "bumpy", "stadium", "quadrics", "polyhedra", "sdf", "csg"};
+// gen:subdiv-MESH:N, a real mesh subdivided to N triangles (SubdivideMesh).
+const std::string kSubdiv = "subdiv-";
 }  // namespace
 
 std::string GeneratedKinds()
@@ -24,7 +26,7 @@ std::string GeneratedKinds()
     if (!s.empty()) s += '|';
     s += k;
   }
-  return s;
+  return s + '|' + kSubdiv + "MESH";
 }
 
 namespace fs = std::filesystem;
@@ -51,8 +53,13 @@ std::optional<SceneRef> GeneratedRef(const std::string& name)
   auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
   if (ec != std::errc() || p != num.data() + num.size())
     throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (std::find(std::begin(kGenKinds), std::end(kGenKinds), kind) == std::end(kGenKinds))
+  if (kind.rfind(kSubdiv, 0) == 0) {
+    if (MeshPath(kind.substr(kSubdiv.size())).empty())
+      throw InputError(fmt::format("scene '{}': no mesh ../shared/scenes/meshes/{}.obj beside the source tree", name,
+                                   kind.substr(kSubdiv.size())));
+  } else if (std::find(std::begin(kGenKinds), std::end(kGenKinds), kind) == std::end(kGenKinds)) {
     throw InputError(fmt::format("scene '{}': generated kinds are {}", name, GeneratedKinds()));
+  }
   return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
 }
 
@@ -71,6 +78,15 @@ std::string Shown(const std::string& path, const std::string& root)
 }
 
 }  // namespace
+
+std::string MeshPath(const std::string& name)
+{
+  const std::string dir = MeshDir(FindSourceRoot());
+  std::error_code ec;
+  if (dir.empty() || name.empty() || name.find('/') != std::string::npos) return "";
+  const fs::path p = fs::path(dir) / (name + ".obj");
+  return fs::is_regular_file(p, ec) ? p.string() : "";
+}
 
 std::string FindSourceRoot()
 {
@@ -151,6 +167,11 @@ Scene LoadBenchScene(const SceneRef& ref)
   const auto colon = ref.path.find(':', 4);
   const std::string kind = ref.path.substr(4, colon - 4);
   const std::uint64_t n = std::stoull(ref.path.substr(colon + 1));
+  if (kind.rfind(kSubdiv, 0) == 0) {
+    const std::string mesh = MeshPath(kind.substr(kSubdiv.size()));
+    if (mesh.empty()) throw InputError(fmt::format("scene '{}': mesh not found", ref.path));
+    return SubdivideMesh(LoadScene(mesh), n);
+  }
   if (kind == "sphereflake") return GenerateSphereflake(static_cast<int>(std::min<std::uint64_t>(n, 100)));
   if (kind == "bumpy") return GenerateBumpySphere(n);
   if (kind == "quadrics") return GenerateQuadricField(n);

@@ -24,6 +24,9 @@ struct SceneRef {
 // neither leads to it.
 std::string FindSourceRoot();
 
+// ../shared/scenes/meshes/NAME.obj beside the source tree, or "" when absent.
+std::string MeshPath(const std::string& name);
+
 // The generated scene kinds (gen:KIND:N), as "a|b|c" for help and messages.
 std::string GeneratedKinds();
 
@@ -32,7 +35,8 @@ const std::vector<std::string>& DefaultSpdScenes();
 
 // Resolves names: an existing file; an SPD name (scenes/spd/NAME.nff); a mesh
 // name (../shared/scenes/meshes/NAME.obj); or gen:sphereflake:DEPTH,
-// gen:bumpy:TRIANGLES, gen:stadium:DEPTH. No names: the 7 SPD scenes and,
+// gen:bumpy:TRIANGLES, gen:stadium:DEPTH, gen:subdiv-MESH:TRIANGLES (that
+// mesh subdivided). No names: the 7 SPD scenes and,
 // when the mesh directory exists, its meshes (`notes` says when it does not).
 // InputError for a name that resolves to nothing.
 std::vector<SceneRef> ResolveScenes(const std::vector<std::string>& names, std::vector<std::string>& notes);

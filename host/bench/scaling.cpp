@@ -15,6 +15,12 @@ std::vector<SceneRef> ScalingScenes(bool quick)
   for (int d = quick ? 2 : 3; d <= (quick ? 4 : 7); ++d) add("sphereflake", std::uint64_t(d));
   for (std::uint64_t n = 1000; n <= (quick ? 100000u : 10000000u); n *= 10) add("bumpy", n);
   add("stadium", quick ? 2 : 4);
+  // Real meshes subdivided to 10^6 and 10^7 triangles, where ../shared has
+  // them (not in the quick study).
+  if (!quick)
+    for (const char* mesh : {"bunny", "sponza"})
+      if (!MeshPath(mesh).empty())
+        for (std::uint64_t n : {1000000u, 10000000u}) add(fmt::format("subdiv-{}", mesh), n);
   return out;
 }
 

@@ -1,5 +1,6 @@
 #include "host/scene/generate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -130,6 +131,79 @@ Scene GenerateBumpySphere(std::uint64_t triangles)
         AddTriangle(s, p00, p10, p11, 1);
         AddTriangle(s, p00, p11, p01, 1);
       }
+  return s;
+}
+
+Scene SubdivideMesh(const Scene& mesh, std::uint64_t triangles)
+{
+  const std::uint64_t n0 = mesh.triangles.size();
+  const bool onlyTriangles = std::all_of(mesh.prims.begin(), mesh.prims.end(), [](const PrimInfo& p) {
+    return p.type == CR_PRIM_TRIANGLE && p.part == 0 && p.motion == glm::vec3(0.0f);
+  });
+  if (n0 == 0 || !onlyTriangles)
+    throw InputError(fmt::format("{}: subdivision needs a static mesh of triangles only", mesh.path));
+  if (triangles < n0 || triangles > (std::uint64_t(1) << 27))
+    throw InputError(fmt::format("{}: subdivision to {} triangles: expected {} .. 2^27", mesh.path, triangles, n0));
+  struct Tri {
+    glm::dvec3 v[3];
+    std::uint32_t material;
+  };
+  std::vector<Tri> tris;
+  tris.reserve(std::size_t(triangles));
+  for (std::uint32_t g = 0; g < n0; ++g) {
+    const Triangle& t = mesh.triangles[g];
+    Tri x{};
+    for (int k = 0; k < 3; ++k) x.v[0][k] = t.v0[k], x.v[1][k] = t.v1[k], x.v[2][k] = t.v2[k];
+    x.material = mesh.prims[mesh.pieceIds[CR_PRIM_TRIANGLE][g]].material;
+    tris.push_back(x);
+  }
+  // Midpoints as (a + b) / 2 in double: the same point from either side.
+  const auto mid = [](const glm::dvec3& a, const glm::dvec3& b) { return 0.5 * (a + b); };
+  while (tris.size() * 4 <= triangles) {
+    std::vector<Tri> next;
+    next.reserve(tris.size() * 4);
+    for (const Tri& t : tris) {
+      const glm::dvec3 m01 = mid(t.v[0], t.v[1]), m12 = mid(t.v[1], t.v[2]), m20 = mid(t.v[2], t.v[0]);
+      next.push_back({{t.v[0], m01, m20}, t.material});
+      next.push_back({{m01, t.v[1], m12}, t.material});
+      next.push_back({{m20, m12, t.v[2]}, t.material});
+      next.push_back({{m01, m12, m20}, t.material});
+    }
+    tris.swap(next);
+  }
+  // Bisections of the largest triangles, round by round, up to the target.
+  while (tris.size() < triangles) {
+    const std::size_t split = std::min<std::size_t>(tris.size(), std::size_t(triangles) - tris.size());
+    const auto area = [](const Tri& t) { return glm::length(glm::cross(t.v[1] - t.v[0], t.v[2] - t.v[0])); };
+    std::vector<std::size_t> order(tris.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    if (split < tris.size())
+      std::nth_element(order.begin(), order.begin() + std::ptrdiff_t(split), order.end(),
+                       [&](std::size_t a, std::size_t b) { return area(tris[a]) > area(tris[b]); });
+    tris.reserve(tris.size() + split);  // no reallocation below: t stays valid
+    for (std::size_t k = 0; k < split; ++k) {
+      Tri& t = tris[order[k]];
+      int e = 0;  // the longest edge: v[e] to v[(e + 1) % 3]
+      double best = -1.0;
+      for (int i = 0; i < 3; ++i) {
+        const double l = glm::length(t.v[(i + 1) % 3] - t.v[i]);
+        if (l > best) best = l, e = i;
+      }
+      const glm::dvec3 a = t.v[e], b = t.v[(e + 1) % 3], c = t.v[(e + 2) % 3], m = mid(a, b);
+      tris.push_back({{m, b, c}, t.material});
+      t = {{a, m, c}, t.material};
+    }
+  }
+  Scene s;
+  s.path = mesh.path;
+  s.camera = mesh.camera;
+  s.hasCamera = mesh.hasCamera;
+  s.background = mesh.background;
+  s.lights = mesh.lights;
+  s.materials = mesh.materials;
+  s.prims.reserve(tris.size());
+  s.triangles.reserve(tris.size());
+  for (const Tri& t : tris) AddTriangle(s, t.v[0], t.v[1], t.v[2], t.material);
   return s;
 }
 

@@ -19,6 +19,16 @@ Scene GenerateSphereflake(int depth);
 // modulated by a few sines.
 Scene GenerateBumpySphere(std::uint64_t triangles);
 
+// A triangle mesh refined to exactly `triangles` triangles, the same surface
+// (flat subdivision: no smoothing): rounds of midpoint subdivision (each
+// triangle into four, the edge midpoints computed alike from both sides, so
+// no cracks) while the count stays within the target, then the largest
+// triangles bisected across their longest edge (a T-junction there) until
+// the count is reached. Keeps the mesh's camera, lights and materials; its
+// shading normals are dropped. InputError when the mesh has other primitives
+// or the target is below its triangle count or above 2^27.
+Scene SubdivideMesh(const Scene& mesh, std::uint64_t triangles);
+
 // "Teapot in a stadium" (Haines): a dense object (a sphereflake of the given
 // depth, 1 unit across) at the centre of a sparse scene 10^4 units across
 // (a ground plane, a ring of large pillars), the camera close to the object.
