@@ -193,9 +193,9 @@ TEST_CASE("simd grid and octree: per-ray statistics equal the scalar backend's")
 // slab distance is then 0 for a lane, the interval's corner), and their
 // directions have components of 1e-30 and 1e-7 (reciprocals near the float
 // range, products that overflow) or, now and then, +-0 (frustum off).
-std::vector<RayRecord> BVHPlaneRays(const Scene& scene, std::uint64_t packets)
+std::vector<RayRecord> BVHPlaneRays(const Scene& scene, std::uint64_t packets, const AccelParams& params)
 {
-  const AccelData data = BuildAccel(scene, AccelKind::BVH, AccelParams{});
+  const AccelData data = BuildAccel(scene, AccelKind::BVH, params);
   const auto& nodes = data.bvh.nodes;
   std::vector<RayRecord> rays;
   for (std::uint64_t p = 0; p < packets; ++p) {
@@ -232,7 +232,8 @@ TEST_CASE("simd bvh packets: frustums on the nodes' box planes, reciprocals near
   // The packets walk the single rays' wide BVH with the same box and
   // primitive tests; the frustum only skips children: every answer must be
   // the single rays' and, in robust mode, the scalar backend's (occlusion:
-  // the same rays occluded), and robust mode 0 wrong against the reference. (Before
+  // the same rays occluded; see below for the one exception), and robust
+  // mode 0 wrong against the reference. (Before
   // host/trace/direction_scale.h, the rays whose whole direction was ~1e-30
   // made every backend wrong on balls and tree: d.d underflowed.)
   const auto isas = AvailableIsas();
@@ -250,17 +251,25 @@ TEST_CASE("simd bvh packets: frustums on the nodes' box planes, reciprocals near
   };
   for (const std::string& name : test::Scenes({"balls", "gears", "teapot", "tetra", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
-    const auto rays = BVHPlaneRays(scene, 500);
+    // Both SAH cost forms (the SIMD backend's default is blocks of 4 on a
+    // scene of triangles only), the same tree for every backend: with
+    // different trees, rays at a vertex may meet two triangles at distances
+    // within the ray's tolerance and keep either.
+    for (int block : {1, 4}) {
+    AccelParams params;
+    params.bvhSahBlock = block;
+    const auto rays = BVHPlaneRays(scene, 500, params);
     for (Precision prec : {Precision::Robust, Precision::Fast})
       for (bool occlusion : {false, true}) {
         TraceConfig scalarCfg;
         scalarCfg.backend = Backend::Scalar;
         scalarCfg.precision = prec;
+        scalarCfg.params = params;
         std::vector<HitRecord> scalarHits;
         const auto r = test::CheckTracer(scene, scalarCfg, rays, occlusion, &scalarHits);
         std::size_t nHits = 0;
         for (const HitRecord& h : scalarHits) nHits += h.prim != CR_NO_HIT;
-        INFO(name, " ", PrecisionName(prec), occlusion ? " occlusion" : " closest");
+        INFO(name, " ", PrecisionName(prec), occlusion ? " occlusion" : " closest", " sah block ", block);
         CHECK(nHits > rays.size() / 20);  // the set meets the geometry
         if (prec == Precision::Robust) CHECK(r.wrong == 0);
         for (const std::string& isa : isas) {
@@ -275,9 +284,21 @@ TEST_CASE("simd bvh packets: frustums on the nodes' box planes, reciprocals near
           CHECK(sameAnswers(hits, singleHits, occlusion) == rays.size());
           // Fast mode's Moller-Trumbore differs between the SIMD and scalar
           // kernels on a few of these edge rays (gears, teapot: up to 11 of
-          // 4,000; docs/SIMD.md); robust mode must not.
-          if (prec == Precision::Robust) CHECK(sameAnswers(hits, scalarHits, occlusion) == rays.size());
+          // 4,000; docs/SIMD.md). Robust mode answers as the scalar backend
+          // but where the two structures' leaves differ (AVX2 packs of 8
+          // merge more binary leaves) and a ray from a mesh vertex meets two
+          // triangles within its tolerance: teapot, sah block 1, one ray of
+          // 4,000, the SIMD walk at t = 1.5e-15 (the reference's distance),
+          // the scalar BVH at 4.3e-15 (grid and octree: as SIMD). Both must
+          // be right against the reference; at most 1 in 1,000 may differ.
+          if (prec == Precision::Robust) {
+            const std::size_t differ = rays.size() - sameAnswers(hits, scalarHits, occlusion);
+            if (differ) MESSAGE(differ, " of ", rays.size(), " answers differ from the scalar backend's");
+            CHECK(differ <= rays.size() / 1000);
+            CHECK(ref::CheckHits(test::CachedReference(scene), rays, hits, occlusion, Tracer::NoTimes()).wrong == 0);
+          }
         }
       }
+    }
   }
 }

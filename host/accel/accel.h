@@ -45,6 +45,9 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \
+  X(bvhSahBlock, int, "--bvh-sah-block",                                                        \
+    "BVH build: the SAH counts a leaf's cost in blocks of this many primitives (Embree's sahBlockSize; 0: " \
+    "the backend's choice, 4 for simd on a scene of triangles only, else 1)")                    \
   X(hgridTopDensity, double, "--hgrid-top-density", "Hierarchical grid: root cells per primitive")       \
   X(hgridDensity, double, "--hgrid-density", "Hierarchical grid: child cells per reference of a crowded cell") \
   X(hgridLeaf, int, "--hgrid-leaf", "Hierarchical grid: most references a cell holds without a child grid")

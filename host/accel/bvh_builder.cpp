@@ -166,6 +166,7 @@ struct Bins {
 struct Builder {
   BigVector<PrimRef> refs;  // not zero-filled: every element is written first
   int maxLeaf = kDefaultLeaf;
+  std::uint32_t sahBlock = 1;  // --bvh-sah-block
   std::atomic<std::uint64_t> nodeCount{0};
   // Spatial-split builds: the scene (to clip primitives), its ranges, the
   // root's area, and the references made by splits.
@@ -196,12 +197,16 @@ struct Builder {
         });
   }
 
+  // A leaf's intersection cost: its primitives in blocks of sahBlock (the
+  // SIMD packs test a block at once; Embree's sahBlockSize).
+  float Blocks(std::uint32_t c) const { return float((c + sahBlock - 1u) / sahBlock); }
+
   // The SAH sweep over m bins in order: boxOf(j) the bin's box, leftN(j)
   // the references it adds to the left side, rightN(j) those it adds to the
   // right side; take(j, cost) for each split after bin j with references on
   // both sides, left to right (cost without the parent's area).
   template <class BoxOf, class LeftN, class RightN, class Take>
-  static void SahSweep(int m, BoxOf boxOf, LeftN leftN, RightN rightN, Take take)
+  void SahSweep(int m, BoxOf boxOf, LeftN leftN, RightN rightN, Take take) const
   {
     float rightArea[kBins];
     std::uint32_t rightCnt[kBins];
@@ -219,7 +224,7 @@ struct Builder {
       acc.Extend(boxOf(j));
       c += leftN(j);
       if (c == 0 || rightCnt[j + 1] == 0) continue;
-      take(j, acc.Area() * float(c) + rightArea[j + 1] * float(rightCnt[j + 1]));
+      take(j, acc.Area() * Blocks(c) + rightArea[j + 1] * Blocks(rightCnt[j + 1]));
     }
   }
 
@@ -472,7 +477,7 @@ struct Builder {
       const float best = std::min(os.cost, ss.cost);
       const float parentArea = node->box.Area();
       const float splitCost = parentArea > 0.0f ? 1.0f + best / parentArea : INFINITY;
-      if (!(best < INFINITY) || (n <= static_cast<std::uint32_t>(maxLeaf) && float(n) <= splitCost)) {
+      if (!(best < INFINITY) || (n <= static_cast<std::uint32_t>(maxLeaf) && Blocks(n) <= splitCost)) {
         if (n <= static_cast<std::uint32_t>(maxLeaf)) return leaf();
       } else if (ss.cost < os.cost) {
         const int a = ss.axis;
@@ -574,7 +579,7 @@ struct Builder {
     } else {
       const ObjectSplit os = FindObjectSplit(refs.data() + begin, n, nb);
       const float parentArea = step.box.Area();
-      const float leafCost = float(n);
+      const float leafCost = Blocks(n);
       const float splitCost = parentArea > 0.0f ? 1.0f + os.cost / parentArea : INFINITY;
       if (os.axis < 0 || (n <= static_cast<std::uint32_t>(maxLeaf) && leafCost <= splitCost)) {
         if (n <= static_cast<std::uint32_t>(maxLeaf)) return leaf();
@@ -701,16 +706,21 @@ void CopyFlat(const std::vector<FlatCopy>& copies, BigVector<BVHNode>& nodes, Ac
 
 }  // namespace
 
+static std::string BlockParam(std::uint32_t block) { return block > 1 ? fmt::format(" sah_block={}", block) : ""; }
+
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
 {
   if (params.bvhLeaf < 0 || params.bvhLeaf > 255)
     throw InputError(fmt::format("--bvh-leaf {} is not in 1..255", params.bvhLeaf));
+  if (params.bvhSahBlock < 0 || params.bvhSahBlock > 64)
+    throw InputError(fmt::format("--bvh-sah-block {} is not in 1..64", params.bvhSahBlock));
   const std::string& quality = params.bvhQuality;
   if (!quality.empty() && quality != "medium" && quality != "high")
     throw InputError(fmt::format("--bvh-quality '{}': expected medium or high", quality));
   const bool spatial = quality == "high";
   Builder bld;
   bld.maxLeaf = params.bvhLeaf > 0 ? params.bvhLeaf : kDefaultLeaf;
+  bld.sahBlock = params.bvhSahBlock > 0 ? std::uint32_t(params.bvhSahBlock) : 1u;
   const std::uint32_t n = scene.NumUnified();
   bld.refs.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
@@ -732,7 +742,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     empty.first = 0;
     out.nodes.push_back(empty);
     out.header.nNodes = 1;
-    info.params = fmt::format("leaf={} bins={}", bld.maxLeaf, kBins);
+    info.params = fmt::format("leaf={} bins={}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
     info.nodes = 1;
     info.bytes = sizeof(BVHNode);
     return out;
@@ -768,7 +778,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   info.refs = out.refs.size();
   info.emptyLeaves = 0;
   info.bytes = out.nodes.size() * sizeof(BVHNode) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("leaf={} bins={}", bld.maxLeaf, kBins);
+  info.params = fmt::format("leaf={} bins={}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
   if (spatial)
     info.params += fmt::format(" quality=high spatial_bins={} split_refs={}", kSpatialBins, bld.splitRefs.load());
   return out;

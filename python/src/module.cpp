@@ -282,7 +282,7 @@ AccelParams ParamsFrom(const nb::dict& d)
     if (!known)
       throw nb::type_error(("tracer() got an unexpected keyword argument '" + key +
                             "' (structure parameters: grid_density, octree_leaf, octree_depth, octree_build, bvh_leaf, "
-                            "bvh_quality, hgrid_top_density, hgrid_density, hgrid_leaf)")
+                            "bvh_quality, bvh_sah_block, hgrid_top_density, hgrid_density, hgrid_leaf)")
                                .c_str());
   }
   return p;
