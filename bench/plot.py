@@ -250,7 +250,8 @@ def plot_scaling(res, out):
     if not sc or not sc.get("rows"):
         return
     rows = sc["rows"]
-    fam = lambda s: s.split("-")[0]  # noqa: E731
+    # A scene's family: sphereflake-7 -> sphereflake, subdiv-bunny-1000000 -> subdiv-bunny.
+    fam = lambda s: s.rsplit("-", 1)[0] if s.startswith("subdiv-") else s.split("-")[0]  # noqa: E731
     labels = list(OrderedDict.fromkeys(r["label"] for r in rows))
     cmap = plt.get_cmap("tab10")
     fig, axes = plt.subplots(2, 2, figsize=(12, 9))
@@ -260,7 +261,7 @@ def plot_scaling(res, out):
         (axes[1, 0], "primary rays: ns per ray", lambda r: 1e3 / mrays(r) if mrays(r) else None, "primary"),
         (axes[1, 1], "diffuse rays: ns per ray", lambda r: 1e3 / mrays(r) if mrays(r) else None, "diffuse"),
     ]
-    styles = {"sphereflake": "-", "bumpy": "--"}
+    styles = {"sphereflake": "-", "bumpy": "--", "subdiv-bunny": ":", "subdiv-sponza": "-."}
     for ax, title, value, kind in panels:
         for li, label in enumerate(labels):
             for family, ls in styles.items():
@@ -288,7 +289,8 @@ def plot_scaling(res, out):
         ax.set_title(title, fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
     axes[0, 0].legend(fontsize=6, ncol=2)
-    fig.suptitle("cost growth with scene size (sphereflake: solid, bumpy sphere: dashed, stadium: star)", fontsize=10)
+    fig.suptitle("cost growth with scene size (sphereflake: solid, bumpy sphere: dashed, subdivided bunny: "
+                 "dotted, subdivided sponza: dash-dot, stadium: star)", fontsize=10)
     fig.subplots_adjust(hspace=0.3)
     save(fig, out, "scaling")
 
