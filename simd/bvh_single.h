@@ -2,21 +2,28 @@
 // simd/bvh_wide.h; Wald, Benthin & Boulos 2008, "Getting rid of packets",
 // and Dammertz et al. 2008, "Shallow bounding volume hierarchies"): the ray
 // tests all N child boxes of a node at once, visits the hit children nearest
-// first (the others wait on the stack with their entry distance), and tests
-// the primitives of a leaf K at a time from structure-of-arrays packs.
+// first (any-hit queries: in slot order; the others wait on the stack with
+// their entry distance, their lines prefetched), and tests the primitives of
+// a leaf K at a time from structure-of-arrays packs.
 //
 // Same answers as BVH_Trace: every box and primitive test is the scalar one
 // lane by lane; a pack's hits are reduced with Hit_Closer's order (nearer t,
 // then lower g, which is lane order inside a pack), so the closest hit does
 // not depend on the visiting order, and a pending node is dropped only when
 // its entry distance is beyond the current hit (as the scalar stack pop).
+// Except where the two walks test different primitives (their leaves differ:
+// packs of 8 merge more binary leaves, and the SIMD backend's SAH may count
+// blocks, docs/ACCEL.md) and a ray grazes a vertex that a float test hits
+// and exact arithmetic misses: there the answers differ within the ray's
+// tolerance (tests/test_simd_cells.cpp, the frustum test).
 // Statistics: nTS counts wide nodes and leaves visited, nIT the real
 // primitives of every pack tested.
 #pragma once
 
+#include <cstddef>
+
 #include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
-#include <cstddef>
 
 namespace cr::simd::CR_SIMD_NS {
 
