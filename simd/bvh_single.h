@@ -21,6 +21,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 #include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
@@ -198,8 +199,12 @@ CR_SIMD_INLINE void WideSlot_Prefetch(const KernelScene& sc, const WideNode<N>* 
     CR_PRIM_TYPES(CR_SIMD_LEAF_PREFETCH_)
 #undef CR_SIMD_LEAF_PREFETCH_
   }
-  for (int o = 0; o < bytes; o += 64) __builtin_prefetch(a + o);
-  if (bytes) __builtin_prefetch(a + bytes - 1);
+  // Each 64-byte line of [a, a + bytes) once (a node is line-aligned; a
+  // pack need not be).
+  const std::uintptr_t first = reinterpret_cast<std::uintptr_t>(a) & ~std::uintptr_t(63);
+  const std::uintptr_t last = reinterpret_cast<std::uintptr_t>(a) + std::uintptr_t(bytes) - 1u;
+  for (std::uintptr_t line = first; bytes && line <= last; line += 64)
+    __builtin_prefetch(reinterpret_cast<const void*>(line));
 }
 
 // Closest hit (anyHit = 0) or any hit of one ray in the subtree of the slot

@@ -114,15 +114,19 @@ KernelAccel KernelAccelOf(AccelKind k) { return static_cast<KernelAccel>(k); }
 // otherwise. On bumpy 10^7 it made 647 MiB of 744, 2.5 s of 3.4 to build;
 // with spheres and cones it cost (tree diffuse 1.6x the time), so other
 // scenes keep 1 (docs/SIMD.md `single`).
+// The scene's primitive types, a bit per CR_PRIM_* (KernelKey::types).
+unsigned SceneTypes(const Scene& scene)
+{
+  unsigned types = 0;
+  scene.ForEachType([&](const auto& pieces, std::uint32_t k) { types |= pieces.empty() ? 0u : 1u << k; });
+  return types;
+}
+
 AccelParams SimdParams(const Scene& scene, const TraceConfig& cfg)
 {
   AccelParams p = cfg.params;
-  bool trianglesOnly = scene.NumUnified() > 0;
-#define CR_SIMD_ONLY_TRIANGLES_(T, U, a) \
-  if (CR_PRIM_##U != CR_PRIM_TRIANGLE && !scene.a.empty()) trianglesOnly = false;
-  CR_PRIM_TYPES(CR_SIMD_ONLY_TRIANGLES_)
-#undef CR_SIMD_ONLY_TRIANGLES_
-  if (cfg.accel == AccelKind::BVH && p.bvhSahBlock == 0 && trianglesOnly) p.bvhSahBlock = 4;
+  if (cfg.accel == AccelKind::BVH && p.bvhSahBlock == 0 && SceneTypes(scene) == 1u << CR_PRIM_TRIANGLE)
+    p.bvhSahBlock = 4;
   return p;
 }
 
@@ -170,8 +174,7 @@ class SimdTracer final : public Tracer {
 
     KernelKey key;
     key.accel = KernelAccelOf(cfg.accel);
-    key.types = 0;
-    scene.ForEachType([&](const auto& pieces, std::uint32_t k) { key.types |= pieces.empty() ? 0u : 1u << k; });
+    key.types = SceneTypes(scene);
     key.fast = cfg.precision == Precision::Fast;
     key.stats = cfg.stats;
     key.motion = sc_.motion != nullptr;
