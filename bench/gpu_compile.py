@@ -49,7 +49,7 @@ LIBCLC = "/usr/lib/clc"
 # The type sets of the SPD scenes (and one with every type), by type name.
 TYPE_SETS = [("T", ["TRIANGLE"]), ("ST", ["SPHERE", "TRIANGLE"]), ("STC", ["SPHERE", "TRIANGLE", "CONE"])]
 QUERIES = [("closest", 0, "RAYS"), ("any", 1, "RAYS"), ("camera", 0, "CAMERA")]
-VARIANTS = ["ray", "packet"]
+VARIANTS = ["ray", "stackless", "packet"]  # stackless: the ray kernel with the BVH walked without a stack
 PRECISIONS = ["fast", "robust", "fp64"]
 PACKET = (8, 8)  # host/cl/cl_options.cpp: 8x8 work-groups off the CPU
 
@@ -101,6 +101,8 @@ def build_options(precision, types_present, all_types, accel, anyhit, variant, s
         o += ["-DCR_ACCEL_ONE", f"-DCR_ACCEL_{accel}"]
         o += [f"-DCR_ANYHIT={anyhit}", "-DCR_UNIFIED=0"]
         o.append("-DCR_VARIANT_PACKET" if variant == "packet" else "-DCR_VARIANT_RAY")
+        if variant == "stackless":
+            o.append("-DCR_BVH_STACKLESS")
         o.append(f"-DCR_SOURCE_{source}")
     return o
 
@@ -166,6 +168,8 @@ def configurations(args, types, accels):
     for accel, variant, (qname, anyhit, source), prec, (tname, tset) in itertools.product(
             [a for a in accels if a.lower() in args.accels], VARIANTS, QUERIES,
             [p for p in PRECISIONS if p in args.precisions], sets):
+        if variant == "stackless" and accel != "BVH":
+            continue  # the BVH's walk (--variant stackless)
         cid = f"{accel.lower()}-{variant}-{qname}-{prec}-{tname}"
         cfgs.append(dict(id=cid, accel=accel.lower(), variant=variant, query=qname, precision=prec, types=tname,
                          options=build_options(prec, tset, types, accel, anyhit, variant, source,

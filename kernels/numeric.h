@@ -150,6 +150,47 @@ CR_FUNC void Df_QuadraticRoots(Df a, Df bh, Df c, Df disc, real* t0, real* t1)
 }
 #endif
 
+/* Error-free transformations in `real` (float, or double in fp64 mode):
+ * a + b = s + e and a b = p + e exactly (Knuth's TwoSum; Dekker's
+ * TwoProduct with Veltkamp's split, no FMA, so every device gets the same
+ * bits). Robust mode's double-float arithmetic above has its own float forms. */
+CR_FUNC real Rt_TwoSum(real a, real b, real* e)
+{
+  const real s = a + b;
+  const real bb = s - a;
+  *e = (a - (s - bb)) + (b - bb);
+  return s;
+}
+CR_FUNC real Rt_TwoProduct(real a, real b, real* e)
+{
+#ifdef CR_FP64
+  const real split = 134217729.0; /* 2^27 + 1 */
+#else
+  const real split = 4097.0f; /* 2^12 + 1 */
+#endif
+  const real p = a * b;
+  const real ca = split * a, cb = split * b;
+  const real ah = ca - (ca - a), bh = cb - (cb - b);
+  const real al = a - ah, bl = b - bh;
+  *e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+  return p;
+}
+/* The sum of p[0..n) (n >= 1) to about one rounding of itself plus
+ * (n u)^4 of the sum of the terms' magnitudes: Ogita, Rump & Oishi's SumK
+ * ("Accurate sum and dot product", SIAM J. Sci. Comput. 2005) with K = 4:
+ * three cascades of TwoSum that each leave the sum in p[n-1] and the exact
+ * errors below it, then the plain sum. For terms that cancel by many orders
+ * of magnitude (|o - c|^2 - r^2 of a ground sphere seen from just above
+ * it). Overwrites p. */
+CR_FUNC real Rt_SumK4(real* p, int n)
+{
+  for (int pass = 0; pass < 3; ++pass)
+    for (int i = 1; i < n; ++i) p[i] = Rt_TwoSum(p[i], p[i - 1], &p[i - 1]);
+  real s = (real)0.0f;
+  for (int i = 0; i + 1 < n; ++i) s += p[i];
+  return s + p[n - 1];
+}
+
 /* Roots of a t^2 + 2 bh t + c = 0 given disc = bh^2 - a c >= 0, smaller first
  * (Press et al.: q = -(bh + sign(bh) sqrt(disc)), roots q/a and c/q, no
  * cancellation between -bh and the square root). The Vieta root c/q is only

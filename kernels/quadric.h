@@ -25,7 +25,10 @@
  * errors are far smaller, docs/TOLERANCE.md), or where the
  * discriminant is within four times its own error of
  * 0 (hit or miss undecided), the whole test runs again in double-float from
- * the exact o - centre (Quadric_IntersectDf). That covers the quadric's
+ * the exact o - centre (Quadric_IntersectDf); so does a root whose point
+ * lies within its error of a face of the clip box (Quadric_BoxUndecided),
+ * where the double-float test decides with the root in double-float. That
+ * covers the quadric's
  * versions of the sphere's cases: a ground ellipsoid 1e6 across seen from
  * 10 above (c cancels), a tiny quadric far away (the discriminant cancels),
  * a ray leaving the surface (c near 0, its root near 0).
@@ -82,17 +85,56 @@ CR_FUNC int Quadric_Pick(const Quadric* s, const real x0[3], const real d[3], re
 }
 
 #if !defined(CR_FAST) && !defined(CR_FP64)
+/* Is x0 + t d in the clip box, with t within e of the root and x0 rounded
+ * once? 1 for certain, 0 certainly not, -1 undecided: the point lies within
+ * its error of a face (e |d| for the root, 4u (|x0| + |t d|) for x0's
+ * rounding, the product and the sum). A surface that meets a face at a
+ * grazing angle (a parabolic cylinder whose vertex line lies in a face) puts
+ * hits there that float rounding moves out of the box. */
+CR_FUNC int Quadric_InBoxRobust(const Quadric* s, const real x0[3], const real d[3], real t, real e)
+{
+  int undecided = 0;
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    const real td = t * d[i];
+    const real p = fabs(x0[i] + td);
+    const real ep = e * fabs(d[i]) + 0x1.0p-22f * (fabs(x0[i]) + fabs(td));
+    if (p - ep > (real)s->extent[i]) return 0;
+    undecided = undecided || p + ep >= (real)s->extent[i];
+  }
+  return undecided ? -1 : 1;
+}
+
+/* Whether Quadric_Pick's choice between the roots lo <= hi (each within e)
+ * rests on an undecided box test: the first root in [tmin, tmax] whose box
+ * test is not certainly "out" is undecided. */
+CR_FUNC int Quadric_BoxUndecided(const Quadric* s, const real x0[3], const real d[3], real lo, real hi, real e,
+                                 real tmin, real tmax)
+{
+  const int b0 = lo >= tmin && lo <= tmax ? Quadric_InBoxRobust(s, x0, d, lo, e) : 0;
+  if (b0 != 0) return b0 < 0;
+  return hi >= tmin && hi <= tmax && Quadric_InBoxRobust(s, x0, d, hi, e) < 0;
+}
+
+/* Is the point x + t d in the clip box? In double-float: x exact (o -
+ * centre), t a double-float root. */
+CR_FUNC int Quadric_InBoxDf(const Quadric* s, const Df x[3], const real d[3], Df t)
+{
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    Df p = Df_Add(x[i], Df_MulF(t, d[i]));
+    if (p.hi < 0.0f) p = Df_Neg(p);
+    if (!(Df_Sub(p, Df_F(s->extent[i])).hi <= 0.0f)) return 0; /* out, or NaN (t at infinity) */
+  }
+  return 1;
+}
+
 /* The test in double-float from the exact x0 = o - centre (TwoSum) and
- * exact products of the float data: the cold path of robust mode. */
+ * exact products of the float data: the cold path of robust mode. The
+ * roots stay in double-float for the box test. */
 CR_COLD CR_FUNC int Quadric_IntersectDf(const real org[3], const real dir[3], const Quadric* s, real tmin, real tmax,
                                         real* tHit)
 {
   Df x[3];
-  real xf[3];
-  CR_UNROLL for (int i = 0; i < 3; ++i) {
-    x[i] = Df_SumF(org[i], -s->center[i]);
-    xf[i] = x[i].hi;
-  }
+  CR_UNROLL for (int i = 0; i < 3; ++i) x[i] = Df_SumF(org[i], -s->center[i]);
   /* Q's rows as indices into q: xx yy zz xy xz yz. */
   const int row[3][3] = {{0, 3, 4}, {3, 1, 5}, {4, 5, 2}};
   Df a = Df_F(0.0f), bh = Df_F(0.0f), c = Df_F(s->j);
@@ -109,10 +151,27 @@ CR_COLD CR_FUNC int Quadric_IntersectDf(const real org[3], const real dir[3], co
   }
   const Df disc = Df_Sub(Df_Mul(bh, bh), Df_Mul(a, c));
   if (disc.hi < 0.0f) return 0;
-  real t0, t1;
   if (a.hi == 0.0f && bh.hi == 0.0f) return 0; /* no root, or every t (a line on the surface) */
-  Df_QuadraticRoots(a, bh, c, disc, &t0, &t1);
-  return Quadric_Pick(s, xf, dir, t0, t1, tmin, tmax, tHit);
+  /* Df_QuadraticRoots' roots, kept in double-float. */
+  Df sq = Df_Sqrt(disc);
+  if (bh.hi < 0.0f) sq = Df_Neg(sq);
+  const Df q = Df_Neg(Df_Add(bh, sq));
+  Df r0 = Df_Div(q, a);
+  Df r1 = q.hi != 0.0f ? Df_Div(c, q) : r0;
+  if (r1.hi < r0.hi || !(r0.hi == r0.hi)) {
+    const Df tr = r0;
+    r0 = r1;
+    r1 = tr;
+  }
+  if (r0.hi >= tmin && r0.hi <= tmax && Quadric_InBoxDf(s, x, dir, r0)) {
+    *tHit = r0.hi;
+    return 1;
+  }
+  if (r1.hi >= tmin && r1.hi <= tmax && Quadric_InBoxDf(s, x, dir, r1)) {
+    *tHit = r1.hi;
+    return 1;
+  }
+  return 0;
 }
 
 /* Whether root t, within e of its true value, may lie in [tmin, tmax] while
@@ -177,7 +236,8 @@ CR_FUNC int Quadric_Intersect(const Ray* r, const Quadric* s, real tmin, real tm
     const real e1 = ec / fabs(q) + fabs(t1) * rq;
     const real oScale = fmax(fabs(r->org[0]), fmax(fabs(r->org[1]), fabs(r->org[2]))) /
                         fmax(ad[0], fmax(ad[1], ad[2]));
-    if (Quadric_RootNeedsDf(t0, e0, oScale, tmin, tmax) || Quadric_RootNeedsDf(t1, e1, oScale, tmin, tmax))
+    if (Quadric_RootNeedsDf(t0, e0, oScale, tmin, tmax) || Quadric_RootNeedsDf(t1, e1, oScale, tmin, tmax) ||
+        Quadric_BoxUndecided(s, x0, r->dir, fmin(t0, t1), fmax(t0, t1), fmax(e0, e1), tmin, tmax))
       return Quadric_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);
     return Quadric_Pick(s, x0, r->dir, fmin(t0, t1), fmax(t0, t1), tmin, tmax, tHit);
   }

@@ -9,6 +9,30 @@
 #define CR_HAS_SPHERE 1
 #endif
 
+/* c = |o - centre|^2 - r^2 in `real`, accurately: f = o - centre as exact
+ * pairs (TwoSum), its squares and cross terms and r^2 as exact products
+ * (TwoProduct), summed by Rt_SumK4, so that the squares that cancel (a
+ * ground sphere of radius 1e6 seen from 6e-7 above it: |f|^2 and r^2 are
+ * 1e12, c is 1.18) cancel exactly before the small terms are added. Robust
+ * mode's double-float c (48 bits of |f|^2) erred by 3e-4 there, fp64 mode's
+ * double (f rounded) by 2e-4: roots 2e-8 off, twice the checker's
+ * tolerance. The cold path of both modes (2^20 diffuse rays of
+ * scenes/scale/mixed-scales.nff found it). */
+CR_FUNC real Sphere_CAccurate(const real org[3], const Sphere* s)
+{
+  real p[17];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    real fl;
+    const real fh = Rt_TwoSum(org[i], -(real)s->center[i], &fl);
+    p[5 * i] = Rt_TwoProduct(fh, fh, &p[5 * i + 1]);
+    p[5 * i + 2] = Rt_TwoProduct((real)2.0f * fh, fl, &p[5 * i + 3]);
+    p[5 * i + 4] = fl * fl;
+  }
+  p[15] = -Rt_TwoProduct((real)s->radius, (real)s->radius, &p[16]);
+  p[16] = -p[16];
+  return Rt_SumK4(p, 17);
+}
+
 #if !defined(CR_FAST) && !defined(CR_FP64)
 /* The sphere's |f x d|^2 in float carries two errors: the products that
  * cancel in each component (about u |f| |d| each), and f = o - c itself,
@@ -138,7 +162,7 @@ CR_COLD CR_FUNC int Sphere_IntersectDf(const real org[3], const real dir[3], con
   const Df a = Df_Add(Df_Add(Df_ProdF(dir[0], dir[0]), Df_ProdF(dir[1], dir[1])), Df_ProdF(dir[2], dir[2]));
   const Df bh = Df_Dot3F(f, dir);
   const Df r2 = Df_ProdF(s->radius, s->radius);
-  const Df c = Df_Sub(Df_Dot3(f, f), r2);
+  const Df c = Df_F(Sphere_CAccurate(org, s));
   /* An origin outside the sphere moving away from it (c > 0, bh > 0: a ray
    * leaving the surface, the commonest reason to be here) has both roots
    * negative: q = -(bh + sq) < 0, q / a < 0 and c / q < 0, each at least
@@ -196,8 +220,19 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
   real bh = Dot3(f, r->dir);
   real ff = Dot3(f, f);
   real c = ff - rad * rad;
+  real cScale = ff + rad * rad; /* c's error is about u cScale */
+#ifdef CR_FP64
+  /* c lost more than 26 of double's 53 bits to cancellation (an origin on
+   * or near a huge sphere): the accurate sum, from the exact o - centre,
+   * whose error is about u |c| (so Quadratic_Roots takes c / q). */
+  if (fabs(c) < 0x1.0p-26 * cScale) {
+    c = Sphere_CAccurate(r->org, s);
+    cScale = fabs(c);
+  }
+#endif
   real t0, t1;
 #ifdef CR_FAST
+  (void)cScale;
   real b = (real)2.0f * bh;
   real disc4 = b * b - (real)4.0f * a * c;
   if (disc4 < (real)0.0f) return 0;
@@ -222,7 +257,7 @@ CR_FUNC int Sphere_Intersect(const Ray* r, const Sphere* s, real tmin, real tmax
 #endif
   if (disc < (real)0.0f) return 0;
   real q;
-  Quadratic_Roots(a, bh, c, ff + rad * rad, disc, &t0, &t1, &q);
+  Quadratic_Roots(a, bh, c, cScale, disc, &t0, &t1, &q);
 #ifndef CR_FP64
   if (Sphere_NeedsDf(c, ff + rad * rad, bh, disc, ar2 + cc, q, a, ff, cc, t0, t1, tmin, tmax, r->anyHit))
     return Sphere_IntersectDf(r->org, r->dir, s, tmin, tmax, tHit);

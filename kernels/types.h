@@ -235,12 +235,15 @@ CR_FUNC uint Prim_Count(const PrimRanges* r, uint k) { return r->begin[k + 1u] -
 enum { CR_ACCEL_TYPES(CR_ACCEL_ID_) CR_NUM_ACCEL_TYPES };
 #undef CR_ACCEL_ID_
 
-/* BVH header, 16 bytes: the counts of its arrays (the traversal needs none;
- * the record keeps the structures' flat layouts alike). */
+/* BVH header, 16 bytes: the counts of its arrays (the stack traversal needs
+ * none; the record keeps the structures' flat layouts alike). parents: where
+ * the references array holds each node's parent (node 0's is 0), for the
+ * stackless walk (kernels/bvh.h, CR_BVH_STACKLESS); 0 where it holds none. */
 typedef struct {
   uint nNodes;
   uint nRefs;
-  uint pad[2];
+  uint parents;
+  uint pad;
 } BVHHeader;
 
 /* BVH node, 32 bytes (pbrt's LinearBVHNode shape). count == 0: interior node

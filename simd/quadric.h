@@ -126,7 +126,27 @@ CR_SIMD_INLINE vbool<N> Quadric_IntersectN(const vfloat<N> org[3], const vfloat<
       const vbool<N> accurate = e <= vfloat<N>(0x1.0p-17f) * (oScale + Abs(t));
       return AndNot(!((t + e < tmin) | (t - e > tmax)), accurate);
     };
-    refine = AndNot(lanes & (cold | needs(t0, e0) | needs(t1, e1)), miss);
+    // Quadric_BoxUndecided: the first root in range whose box test is not
+    // certainly "out" lies within its error of a face.
+    const vfloat<N> lo = FMin(t0, t1), hi = FMax(t0, t1), e = FMax(e0, e1);
+    auto boxTest = [&](vfloat<N> t, vbool<N>& out) {  // Quadric_InBoxRobust: out, else undecided
+      vbool<N> und(false);
+      out = vbool<N>(false);
+      for (int i = 0; i < 3; ++i) {
+        const vfloat<N> td = t * dir[i];
+        const vfloat<N> p = Abs(x0[i] + td);
+        const vfloat<N> ep = e * ad[i] + vfloat<N>(0x1.0p-22f) * (ax[i] + Abs(td));
+        out = out | (p - ep > s.extent()[i]);
+        und = und | (p + ep >= s.extent()[i]);
+      }
+      return AndNot(und, out);
+    };
+    vbool<N> out0, out1;
+    const vbool<N> in0 = (lo >= tmin) & (lo <= tmax), in1 = (hi >= tmin) & (hi <= tmax);
+    const vbool<N> und0 = in0 & boxTest(lo, out0);
+    const vbool<N> und1 = in1 & boxTest(hi, out1);
+    const vbool<N> boxUndecided = und0 | AndNot(und1, AndNot(in0, out0));  // lo undecided, or not a hit and hi undecided
+    refine = AndNot(lanes & (cold | needs(t0, e0) | needs(t1, e1) | boxUndecided), miss);
   }
   const vfloat<N> lo = FMin(t0, t1), hi = FMax(t0, t1);
   auto inBox = [&](vfloat<N> t) {

@@ -128,6 +128,31 @@ TEST_CASE("bench: unknown scenes and backends are bad input")
   fs::remove_all(dir);
 }
 
+TEST_CASE("bench: a scene without lights skips its shadow rows and runs the rest")
+{
+  const fs::path dir = TempDir("nolight");
+  const fs::path scene = dir / "dark.nff";
+  std::ofstream(scene) << "v\nfrom 0 0 -5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 16 16\n"
+                          "f 1 1 1 1 0 0 0 1\ns 0 0 0 1\n";
+  std::string err;
+  const fs::path out = dir / "o";
+  REQUIRE(RunBinary(fmt::format("bench {} --backend scalar --accel bvh --kinds primary,shadow --rays 256 --repeat 1 "
+                                "--no-images --no-plots --no-stats --out {}",
+                                scene.string(), out.string()),
+                    dir, &err) == 0);
+  CHECK(err.find("no shadow rays") != std::string::npos);
+  std::ifstream in(out / "results.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  int primary = 0, shadowSkipped = 0;
+  for (const auto& r : j["rows"]) {
+    if (r["kind"] == "primary" && r["error"].is_object() && r["error"]["wrong"] == 0) ++primary;
+    if (r["kind"] == "shadow" && r.value("note", std::string()).find("skipped") == 0) ++shadowSkipped;
+  }
+  CHECK(primary == 1);
+  CHECK(shadowSkipped == 1);
+  fs::remove_all(dir);
+}
+
 TEST_CASE("bench: the SDF axis runs a scene with SDF blocks once per eps x relaxation x budget")
 {
   const fs::path dir = TempDir("sdfaxis");
@@ -160,7 +185,7 @@ TEST_CASE("bench: configurations planned by default and from lists")
   std::set<std::string> labels;
   for (const auto& c : all) labels.insert(c.Label());
   for (const char* l : {"simd grid", "simd octree", "simd bvh", "simd hgrid", "opencl grid", "opencl bvh",
-                        "opencl hgrid", "scalar bvh fast",
+                        "opencl hgrid", "opencl bvh stackless", "scalar bvh fast",
                         "scalar bvh fp64", "simd bvh fast", "opencl bvh fp64"})
     CHECK(labels.count(l) == 1);
   CHECK(labels.count("embree packet8") == (EmbreeAvailable() ? 1u : 0u));

@@ -109,12 +109,14 @@ Comparison Compare(const std::vector<HitRecord>& cl, const std::vector<HitRecord
 const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 constexpr int kRaySize = 24;  // 576 rays per scene and kind
 
-// Every SPD scene x ray kind with `accel`, for the ray and packet variants.
+// Every SPD scene x ray kind with `accel`, for the ray and packet variants
+// (and the BVH's stackless walk).
 void RunConformance(AccelKind accel)
 {
   auto cache = TestCacheDir();
   std::size_t ties = 0, otherOccluders = 0;
-  const std::vector<std::string> variants = {"ray", "packet"};
+  std::vector<std::string> variants = {"ray", "packet"};
+  if (accel == AccelKind::BVH) variants.push_back("stackless");
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     TraceConfig sc;
@@ -313,7 +315,7 @@ TEST_CASE("opencl: device choice" * doctest::skip(NoOpenCL()))
   CHECK_NOTHROW(ClCheckAllocation(all[0], "test buffer", 1024));
 }
 
-TEST_CASE("opencl: conformance, bvh, ray and packet variants, every SPD scene x ray kind" *
+TEST_CASE("opencl: conformance, bvh, ray, packet and stackless variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
   RunConformance(AccelKind::BVH);
@@ -413,10 +415,14 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
     TraceStatsSum scalarStats;
     std::vector<HitRecord> ref;
     CreateTracer(scene, sc)->Trace(rays, ref, false, &scalarStats);
-    for (const char* variant : {"ray", "packet"}) {
+    for (const char* variant : {"ray", "packet", "stackless"}) {
       TraceConfig cfg = sc;
       cfg.backend = Backend::OpenCL;
       cfg.variant = variant;
+      if (std::string(variant) == "stackless" && accel != AccelKind::BVH) {
+        CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);  // the BVH's walk only
+        continue;
+      }
       TraceStatsSum stats;
       std::vector<HitRecord> hits;
       CreateTracer(scene, cfg)->Trace(rays, hits, false, &stats);

@@ -177,15 +177,24 @@ TEST_CASE("sdf: a ball's hits lie on the sphere, rays from its surface do not fi
     CHECK(robust.evals > fast.evals);
     CHECK(robust.evals < 64 * robust.marches);
   }
-  // A budget of 2 steps cannot reach the ball from 3 away: a miss, and the
-  // reference (which marches to convergence) is not fooled by it.
+  // A budget of 2 steps cannot reach the ball from 3 away: fast mode misses
+  // (the budget is its); robust and fp64 march on to the reference's budget
+  // and hit it, as the reference does.
   Scene tight;
   ParseNFF("sdf -2 -2 -2 2 2 2 0.001 2 1\n  sphere 0 0 0 1\nsdf end\n", "tight", tight);
-  TraceConfig cfg;
-  std::vector<HitRecord> hits;
   const std::vector<RayRecord> grazing = {RayRecord{{-5.0f, 0.999f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, INFINITY}};
-  CreateTracer(tight, cfg)->Trace(grazing, hits, false, nullptr);
-  CHECK(hits[0].prim == CR_NO_HIT);
+  for (Precision p : {Precision::Fast, Precision::Robust, Precision::Fp64}) {
+    TraceConfig cfg;
+    cfg.precision = p;
+    std::vector<HitRecord> hits;
+    CreateTracer(tight, cfg)->Trace(grazing, hits, false, nullptr);
+    INFO(PrecisionName(p));
+    CHECK(hits[0].prim == (p == Precision::Fast ? CR_NO_HIT : 0u));
+  }
+  ref::ReferenceTracer reference(tight);
+  std::vector<HitRecord> hits;
+  CreateTracer(tight, TraceConfig{})->Trace(grazing, hits, false, nullptr);
+  CHECK(ref::CheckHits(reference, grazing, hits, false).wrong == 0);
 }
 
 TEST_CASE("sdf: SIMD answers equal the scalar kernels' bit for bit (robust and fast, single and packet)")

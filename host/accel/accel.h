@@ -118,6 +118,10 @@ AccelData BuildAccel(const Scene& scene, AccelKind kind, const AccelParams& para
 GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& info);
 OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo& info);
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info);
+// Appends each node's parent to the references (after them; the header's
+// `parents` says where; node 0's is 0) for the stackless walk (kernels/bvh.h,
+// CR_BVH_STACKLESS) and counts their bytes; once.
+void AddBVHParents(BVHData& bvh, AccelInfo& info);
 HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& info);
 
 }  // namespace cr

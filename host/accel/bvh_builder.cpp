@@ -4,6 +4,7 @@
 // children are adjacent (types.h).
 #include <algorithm>
 #include <atomic>
+#include <limits>
 #include <memory>
 
 #include <fmt/format.h>
@@ -782,6 +783,23 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   if (spatial)
     info.params += fmt::format(" quality=high spatial_bins={} split_refs={}", kSpatialBins, bld.splitRefs.load());
   return out;
+}
+
+void AddBVHParents(BVHData& bvh, AccelInfo& info)
+{
+  if (bvh.header.parents != 0 || bvh.nodes.empty()) return;
+  const std::size_t at = bvh.refs.size();
+  if (at + bvh.nodes.size() > std::numeric_limits<std::uint32_t>::max())
+    throw RuntimeError(fmt::format("BVH of {} nodes and {} references: parent links past 2^32 entries",
+                                   bvh.nodes.size(), at));
+  bvh.refs.resize(at + bvh.nodes.size());
+  bvh.refs[at] = 0;
+  for (std::size_t i = 0; i < bvh.nodes.size(); ++i) {
+    const BVHNode& n = bvh.nodes[i];
+    if (n.count == 0) bvh.refs[at + n.first] = bvh.refs[at + n.first + 1] = static_cast<std::uint32_t>(i);
+  }
+  bvh.header.parents = static_cast<std::uint32_t>(at);
+  info.bytes += bvh.nodes.size() * sizeof(std::uint32_t);
 }
 
 }  // namespace cr

@@ -51,10 +51,11 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
   const std::vector<AccelKind> allAccels(std::begin(kAccelKinds), std::end(kAccelKinds));
   if (defaults) {
     // Speed: every structure on the CPU default and on OpenCL, the packet
-    // variants, Embree.
+    // and stackless variants, Embree.
     for (AccelKind a : allAccels) add(Backend::Simd, a, Precision::Robust);
     for (AccelKind a : allAccels) add(Backend::OpenCL, a, Precision::Robust);
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "packet");
+    add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "stackless");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "packet8");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single-robust");
@@ -88,7 +89,10 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
       for (Precision p : precs) {
         if (!HasMode(b, p, openclHasFp64)) continue;
         add(b, a, p);
-        if (b == Backend::OpenCL && a == AccelKind::BVH) add(b, a, p, "packet");
+        if (b == Backend::OpenCL && a == AccelKind::BVH) {
+          add(b, a, p, "packet");
+          add(b, a, p, "stackless");
+        }
       }
   }
   return out;

@@ -77,7 +77,17 @@ RaySet GetRaySet(const std::string& dir, const SceneRef& ref, const Scene& scene
   g.height = set.height;
   g.seed = spec.seed;
   g.count = spec.kind == RayKind::Primary ? 0 : spec.count;
-  set.rays = GenerateRays(scene, tracer, g, &set.times);
+  try {
+    set.rays = GenerateRays(scene, tracer, g, &set.times);
+  } catch (const InputError& e) {
+    // A scene without secondary rays of this kind (no lit primary hit, say)
+    // skips those rows (empty set) instead of ending the whole bench.
+    if (spec.kind == RayKind::Primary) throw;
+    Warn(fmt::format("{} (its {} rows are skipped)", e.what(), RayKindName(spec.kind)));
+    set.rays.clear();
+    set.times.clear();
+    return set;
+  }
   WriteRays(set.path, set.rays, set.times);
   const std::string text = id.dump(2) + "\n";
   WriteFileAtomically(sidecar, text.data(), text.size());

@@ -9,15 +9,16 @@
 
 namespace cr {
 
-void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW, int* tileH)
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW, int* tileH, bool* stackless)
 {
   std::string v = s;
   generic = false;
+  if (stackless) *stackless = false;
   if (tileW) *tileW = 0;
   if (tileH) *tileH = 0;
   const auto bad = [&] {
-    return InputError(fmt::format("--variant '{}': the opencl backend has ray and packet, each also as ray-generic, "
-                                  "packet-generic, optionally with a work-group tile :WxH (e.g. packet:8x8)",
+    return InputError(fmt::format("--variant '{}': the opencl backend has ray, stackless (bvh) and packet, each also "
+                                  "as ray-generic, ..., optionally with a work-group tile :WxH (e.g. packet:8x8)",
                                   s));
   };
   if (const auto colon = v.find(':'); colon != std::string::npos) {
@@ -35,8 +36,9 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int
     generic = true;
     v.resize(v.size() - suffix.size());
   }
-  if (v.empty() || v == "ray") {
+  if (v.empty() || v == "ray" || v == "stackless") {
     variant = ClVariant::Ray;
+    if (stackless) *stackless = v == "stackless";
     return;
   }
   if (v == "packet") {
@@ -53,7 +55,10 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
 {
   ClProgramSpec s;
   int tileW = 0, tileH = 0;
-  ParseClVariant(config.variant, s.variant, s.generic, &tileW, &tileH);
+  ParseClVariant(config.variant, s.variant, s.generic, &tileW, &tileH, &s.stackless);
+  if (s.stackless && config.accel != AccelKind::BVH)
+    throw InputError(fmt::format("--variant {}: the stackless walk is the BVH's (--accel bvh), not the {}'s",
+                                 config.variant, AccelKindName(config.accel)));
   if (config.precision == Precision::Fp64 && !dev.fp64)
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
@@ -143,6 +148,7 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.cameraFp64) o += " -DCR_CAMERA_FP64";
   if (s.stats) o += " -DCR_STATS";
   if (s.coldInline) o += " -DCR_COLD_INLINE";
+  if (s.stackless) o += " -DCR_BVH_STACKLESS";
   o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
   if (!s.generic) {
 #define CR_HAS_OPTION_(T, U, a) o += fmt::format(" -DCR_HAS_" #U "={}", (s.types >> CR_PRIM_##U) & 1u);

@@ -26,6 +26,7 @@ struct ClProgramSpec {
   Precision precision = Precision::Robust;
   bool stats = false;
   ClVariant variant = ClVariant::Ray;
+  bool stackless = false;        // the BVH walked without a stack (CR_BVH_STACKLESS; --variant stackless)
   bool camera = false;           // primary rays generated on the device, else rays from a buffer
   int packetW = 8, packetH = 8;  // work-group tile (the packet of the packet kernels)
   bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's
@@ -47,11 +48,12 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
 // that way), so that results match the scalar backend bit for bit.
 std::string ClBuildOptions(const ClProgramSpec& spec, const ClDevice& dev);
 
-// Parses --variant: "", "ray", "packet", optionally suffixed "-generic", then
+// Parses --variant: "", "ray", "stackless" (the ray kernel with the BVH
+// walked without a stack), "packet", optionally suffixed "-generic", then
 // optionally ":WxH", the work-group tile (packet size; tileW, tileH 0 when
 // absent: the device's default, see MakeClProgramSpec).
 void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW = nullptr,
-                    int* tileH = nullptr);
+                    int* tileH = nullptr, bool* stackless = nullptr);
 const char* ClVariantName(ClVariant v);
 
 }  // namespace cr

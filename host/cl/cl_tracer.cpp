@@ -78,6 +78,8 @@ class ClTracer final : public Tracer {
     tileW_ = spec.packetW;
     tileH_ = spec.packetH;
     AccelData data = BuildAccel(scene, cfg.accel, cfg.params);
+    stackless_ = spec.stackless;
+    if (stackless_) AddBVHParents(data.bvh, data.info);
     info_ = data.info;
     Upload(data);
   }
@@ -142,7 +144,8 @@ class ClTracer final : public Tracer {
 
   std::string VariantName() const override
   {
-    return fmt::format("{} {}{} {}x{}", PrecisionName(config_.precision), ClVariantName(variant_),
+    return fmt::format("{} {}{} {}x{}", PrecisionName(config_.precision),
+                       stackless_ ? "stackless" : ClVariantName(variant_),
                        generic_ ? " generic" : "", tileW_, tileH_);
   }
 
@@ -416,6 +419,7 @@ class ClTracer final : public Tracer {
   TraceConfig config_;
   ClContext cl_;
   ClVariant variant_ = ClVariant::Ray;
+  bool stackless_ = false;  // the BVH walked without a stack (its parent links uploaded with the references)
   bool generic_ = false;
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)
