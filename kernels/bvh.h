@@ -24,8 +24,9 @@
  * host/accel/bvh_builder.cpp AddBVHParents) and sibling (children come in
  * pairs). A GPU keeps its state in registers: the stack walk's 64 entries
  * live in private memory (scratch; docs/OPENCL.md). Each node's box is tested
- * as it is entered, with the cull distance of that moment, so the walk
- * visits every box the stack walk would; the nearer child goes first, by
+ * as it is entered, with the cull distance of that moment (the order differs
+ * from the stack walk's, which sorts children by entry distance, so the two
+ * may visit different nodes; the answers are the same); the nearer child goes first, by
  * the children's centres along the ray: the same answer at every visit of
  * a node, which the way back up relies on. Selected by --variant stackless. */
 CR_FUNC uint BVH_NearChild(CR_GLOBAL const BVHNode* nodes, uint first, const Ray* ray)

@@ -86,8 +86,8 @@ double TwoSum(double a, double b, double& e)
 // r^2 that a ground sphere seen from just above it makes (r = 1e6, 6e-7
 // above: both 1e12, their difference 1.2): f = o - centre as exact pairs
 // (TwoSum), the squares and cross terms as exact products (fma), summed by
-// SumK with K = 3 (Ogita, Rump & Oishi 2005; the kernels' Ef_SumK4 in
-// float). The plain double form erred by 2e-4 there, enough to put the
+// SumK with K = 3 (Ogita, Rump & Oishi 2005; the kernels' Sphere_CAccurate
+// does the same with Rt_SumK4). The plain double form erred by 2e-4 there, enough to put the
 // reference's root 2e-8 (twice the checker's tolerance) from the true one.
 double SphereC(const glm::dvec3& o, const Sphere& s)
 {
