@@ -5,36 +5,41 @@
 #define CELLRAY_KERNELS_NUMERIC_H
 #include "ray.h"
 
-#if !defined(CR_FAST) && !defined(CR_FP64)
-/* Error-free transformations in float (Knuth's TwoSum; Dekker's TwoProduct
- * with Veltkamp's split, which needs no FMA, so every device gets the same
- * bits): a + b = s + e and a b = p + e exactly. */
-CR_FUNC float Ef_TwoSum(float a, float b, float* e)
+/* Error-free transformations in `real` (float, or double in fp64 mode):
+ * a + b = s + e and a b = p + e exactly (Knuth's TwoSum; Dekker's
+ * TwoProduct with Veltkamp's split, no FMA, so every device gets the same
+ * bits). Robust mode's double-float arithmetic below is built on them. */
+CR_FUNC real Rt_TwoSum(real a, real b, real* e)
 {
-  const float s = a + b;
-  const float bb = s - a;
+  const real s = a + b;
+  const real bb = s - a;
   *e = (a - (s - bb)) + (b - bb);
   return s;
 }
-CR_FUNC float Ef_TwoProduct(float a, float b, float* e)
+CR_FUNC real Rt_TwoProduct(real a, real b, real* e)
 {
-  const float p = a * b;
-  const float ca = 4097.0f * a, cb = 4097.0f * b;
-  const float ah = ca - (ca - a), bh = cb - (cb - b);
-  const float al = a - ah, bl = b - bh;
+#ifdef CR_FP64
+  const real split = 134217729.0; /* 2^27 + 1 */
+#else
+  const real split = 4097.0f; /* 2^12 + 1 */
+#endif
+  const real p = a * b;
+  const real ca = split * a, cb = split * b;
+  const real ah = ca - (ca - a), bh = cb - (cb - b);
+  const real al = a - ah, bl = b - bh;
   *e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
   return p;
 }
+#if !defined(CR_FAST) && !defined(CR_FP64)
 /* a b - c d to a few ulps even when the two products cancel. */
 CR_FUNC float Ef_DiffOfProducts(float a, float b, float c, float d)
 {
   float e1, e2, es;
-  const float p1 = Ef_TwoProduct(a, b, &e1);
-  const float p2 = Ef_TwoProduct(c, d, &e2);
-  const float s = Ef_TwoSum(p1, -p2, &es);
+  const float p1 = Rt_TwoProduct(a, b, &e1);
+  const float p2 = Rt_TwoProduct(c, d, &e2);
+  const float s = Rt_TwoSum(p1, -p2, &es);
   return s + (es + (e1 - e2));
 }
-
 
 /* |a| >= |b| (or a == 0): a + b = s + e exactly. */
 CR_FUNC float Ef_FastTwoSum(float a, float b, float* e)
@@ -79,32 +84,32 @@ CR_FUNC Df Df_Neg(Df a)
 CR_FUNC Df Df_SumF(float a, float b)
 {
   Df r;
-  r.hi = Ef_TwoSum(a, b, &r.lo);
+  r.hi = Rt_TwoSum(a, b, &r.lo);
   return r;
 }
 CR_FUNC Df Df_ProdF(float a, float b)
 {
   Df r;
-  r.hi = Ef_TwoProduct(a, b, &r.lo);
+  r.hi = Rt_TwoProduct(a, b, &r.lo);
   return r;
 }
 CR_FUNC Df Df_Add(Df a, Df b)
 {
   float e;
-  const float s = Ef_TwoSum(a.hi, b.hi, &e);
+  const float s = Rt_TwoSum(a.hi, b.hi, &e);
   return Df_Norm(s, e + (a.lo + b.lo));
 }
 CR_FUNC Df Df_Sub(Df a, Df b) { return Df_Add(a, Df_Neg(b)); }
 CR_FUNC Df Df_Mul(Df a, Df b)
 {
   float e;
-  const float p = Ef_TwoProduct(a.hi, b.hi, &e);
+  const float p = Rt_TwoProduct(a.hi, b.hi, &e);
   return Df_Norm(p, e + (a.hi * b.lo + a.lo * b.hi));
 }
 CR_FUNC Df Df_MulF(Df a, float b)
 {
   float e;
-  const float p = Ef_TwoProduct(a.hi, b, &e);
+  const float p = Rt_TwoProduct(a.hi, b, &e);
   return Df_Norm(p, e + a.lo * b);
 }
 CR_FUNC Df Df_Div(Df a, Df b)
@@ -118,7 +123,7 @@ CR_FUNC Df Df_Sqrt(Df a)
   if (!(a.hi > 0.0f)) return Df_F(0.0f);
   const float s = CR_SQRTF(a.hi);
   float e;
-  const float p = Ef_TwoProduct(s, s, &e);
+  const float p = Rt_TwoProduct(s, s, &e);
   return Df_Norm(s, (((a.hi - p) - e) + a.lo) / (2.0f * s));
 }
 /* a x b and a . b of vectors held as double-floats. */
@@ -136,45 +141,28 @@ CR_FUNC void Df_Cross(const Df a[3], const Df b[3], Df c[3])
   c[1] = Df_Sub(Df_Mul(a[2], b[0]), Df_Mul(a[0], b[2]));
   c[2] = Df_Sub(Df_Mul(a[0], b[1]), Df_Mul(a[1], b[0]));
 }
-/* Roots of a t^2 + 2 bh t + c = 0 in double-float given disc >= 0, as float
- * (the nearest float to hi + lo is hi), smaller first. */
-CR_FUNC void Df_QuadraticRoots(Df a, Df bh, Df c, Df disc, real* t0, real* t1)
+/* Roots of a t^2 + 2 bh t + c = 0 in double-float given disc >= 0, in
+ * double-float, unordered: q / a and c / q with q = -(bh + sign(bh) sqrt(disc))
+ * (c / q is q / a again where q = 0). */
+CR_FUNC void Df_QuadraticRootsDf(Df a, Df bh, Df c, Df disc, Df* r0, Df* r1)
 {
   Df sq = Df_Sqrt(disc);
   if (bh.hi < 0.0f) sq = Df_Neg(sq);
   const Df q = Df_Neg(Df_Add(bh, sq));
-  const real r0 = Df_Div(q, a).hi;
-  const real r1 = q.hi != 0.0f ? Df_Div(c, q).hi : r0;
-  *t0 = fmin(r0, r1);
-  *t1 = fmax(r0, r1);
+  *r0 = Df_Div(q, a);
+  *r1 = q.hi != 0.0f ? Df_Div(c, q) : *r0;
+}
+/* The same roots as float (the nearest float to hi + lo is hi), smaller
+ * first. */
+CR_FUNC void Df_QuadraticRoots(Df a, Df bh, Df c, Df disc, real* t0, real* t1)
+{
+  Df r0, r1;
+  Df_QuadraticRootsDf(a, bh, c, disc, &r0, &r1);
+  *t0 = fmin(r0.hi, r1.hi);
+  *t1 = fmax(r0.hi, r1.hi);
 }
 #endif
 
-/* Error-free transformations in `real` (float, or double in fp64 mode):
- * a + b = s + e and a b = p + e exactly (Knuth's TwoSum; Dekker's
- * TwoProduct with Veltkamp's split, no FMA, so every device gets the same
- * bits). Robust mode's double-float arithmetic above has its own float forms. */
-CR_FUNC real Rt_TwoSum(real a, real b, real* e)
-{
-  const real s = a + b;
-  const real bb = s - a;
-  *e = (a - (s - bb)) + (b - bb);
-  return s;
-}
-CR_FUNC real Rt_TwoProduct(real a, real b, real* e)
-{
-#ifdef CR_FP64
-  const real split = 134217729.0; /* 2^27 + 1 */
-#else
-  const real split = 4097.0f; /* 2^12 + 1 */
-#endif
-  const real p = a * b;
-  const real ca = split * a, cb = split * b;
-  const real ah = ca - (ca - a), bh = cb - (cb - b);
-  const real al = a - ah, bl = b - bh;
-  *e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
-  return p;
-}
 /* The sum of p[0..n) (n >= 1) to about one rounding of itself plus
  * (n u)^4 of the sum of the terms' magnitudes: Ogita, Rump & Oishi's SumK
  * ("Accurate sum and dot product", SIAM J. Sci. Comput. 2005) with K = 4:

@@ -152,12 +152,9 @@ CR_COLD CR_FUNC int Quadric_IntersectDf(const real org[3], const real dir[3], co
   const Df disc = Df_Sub(Df_Mul(bh, bh), Df_Mul(a, c));
   if (disc.hi < 0.0f) return 0;
   if (a.hi == 0.0f && bh.hi == 0.0f) return 0; /* no root, or every t (a line on the surface) */
-  /* Df_QuadraticRoots' roots, kept in double-float. */
-  Df sq = Df_Sqrt(disc);
-  if (bh.hi < 0.0f) sq = Df_Neg(sq);
-  const Df q = Df_Neg(Df_Add(bh, sq));
-  Df r0 = Df_Div(q, a);
-  Df r1 = q.hi != 0.0f ? Df_Div(c, q) : r0;
+  /* The roots kept in double-float for the box test. */
+  Df r0, r1;
+  Df_QuadraticRootsDf(a, bh, c, disc, &r0, &r1);
   if (r1.hi < r0.hi || !(r0.hi == r0.hi)) {
     const Df tr = r0;
     r0 = r1;

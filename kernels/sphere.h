@@ -17,8 +17,9 @@
  * mode's double-float c (48 bits of |f|^2) erred by 3e-4 there, fp64 mode's
  * double (f rounded) by 2e-4: roots 2e-8 off, twice the checker's
  * tolerance. The cold path of both modes (2^20 diffuse rays of
- * scenes/scale/mixed-scales.nff found it). */
-CR_FUNC real Sphere_CAccurate(const real org[3], const Sphere* s)
+ * scenes/scale/mixed-scales.nff found it). A call of its own (CR_COLD):
+ * inlined into fp64 mode's sphere test it cost 14 VGPRs on gfx906. */
+CR_COLD CR_FUNC real Sphere_CAccurate(const real org[3], const Sphere* s)
 {
   real p[17];
   CR_UNROLL for (int i = 0; i < 3; ++i) {
@@ -72,13 +73,13 @@ CR_FUNC void Sphere_TieT(const real org[3], const real dir[3], real tmin, const 
   real fh[3], fl[3];
   real bhH = 0.0f, bhL = 0.0f, aH = 0.0f, aL = 0.0f;
   CR_UNROLL for (int i = 0; i < 3; ++i) {
-    fh[i] = Ef_TwoSum(org[i], -s->center[i], &fl[i]);
+    fh[i] = Rt_TwoSum(org[i], -s->center[i], &fl[i]);
     real e, se;
-    real p = Ef_TwoProduct(fh[i], dir[i], &e);
-    bhH = Ef_TwoSum(bhH, p, &se);
+    real p = Rt_TwoProduct(fh[i], dir[i], &e);
+    bhH = Rt_TwoSum(bhH, p, &se);
     bhL = bhL + (se + (e + fl[i] * dir[i]));
-    p = Ef_TwoProduct(dir[i], dir[i], &e);
-    aH = Ef_TwoSum(aH, p, &se);
+    p = Rt_TwoProduct(dir[i], dir[i], &e);
+    aH = Rt_TwoSum(aH, p, &se);
     aL = aL + (se + e);
   }
   bhH = Ef_FastTwoSum(bhH, bhL, &bhL);
@@ -88,11 +89,11 @@ CR_FUNC void Sphere_TieT(const real org[3], const real dir[3], real tmin, const 
   real nL, qL, pe;
   for (int root = 0; root < 2; ++root) {
     /* numerator -bh -+ sq, then the quotient by a */
-    real nH = Ef_TwoSum(-bhH, root == 0 ? -sq : sq, &nL);
+    real nH = Rt_TwoSum(-bhH, root == 0 ? -sq : sq, &nL);
     nL = nL - bhL;
     nH = Ef_FastTwoSum(nH, nL, &nL);
     const real qH = nH / aH;
-    const real p = Ef_TwoProduct(qH, aH, &pe);
+    const real p = Rt_TwoProduct(qH, aH, &pe);
     qL = ((((nH - p) - pe) + nL) - qH * aL) / aH;
     *hi = Ef_FastTwoSum(qH, qL, lo);
     if (*hi >= tmin) return;
@@ -202,7 +203,7 @@ CR_COLD CR_FUNC int Sphere_IntersectUndecided(const real org[3], const real dir[
                                               real tmax, real ar2, real Q, real* tHit)
 {
   real fh[3], fl[3];
-  CR_UNROLL for (int i = 0; i < 3; ++i) fh[i] = Ef_TwoSum(org[i], -s->center[i], &fl[i]);
+  CR_UNROLL for (int i = 0; i < 3; ++i) fh[i] = Rt_TwoSum(org[i], -s->center[i], &fl[i]);
   const real de = Sphere_DiscOfExactF(fh, fl, dir, ar2);
   if (de < -(0x1.0p-20f * (ar2 + (ar2 - de)) + 0x1.0p-13f * Q)) return 0;
   return Sphere_IntersectDf(org, dir, s, tmin, tmax, tHit);

@@ -129,9 +129,8 @@ CR_SIMD_INLINE vbool<N> Quadric_IntersectN(const vfloat<N> org[3], const vfloat<
     // Quadric_BoxUndecided: the first root in range whose box test is not
     // certainly "out" lies within its error of a face.
     const vfloat<N> lo = FMin(t0, t1), hi = FMax(t0, t1), e = FMax(e0, e1);
-    auto boxTest = [&](vfloat<N> t, vbool<N>& out) {  // Quadric_InBoxRobust: out, else undecided
-      vbool<N> und(false);
-      out = vbool<N>(false);
+    auto boxTest = [&](vfloat<N> t, vbool<N>* outp) {  // Quadric_InBoxRobust: out (if asked), else undecided
+      vbool<N> und(false), out(false);
       for (int i = 0; i < 3; ++i) {
         const vfloat<N> td = t * dir[i];
         const vfloat<N> p = Abs(x0[i] + td);
@@ -139,12 +138,13 @@ CR_SIMD_INLINE vbool<N> Quadric_IntersectN(const vfloat<N> org[3], const vfloat<
         out = out | (p - ep > s.extent()[i]);
         und = und | (p + ep >= s.extent()[i]);
       }
+      if (outp) *outp = out;
       return AndNot(und, out);
     };
-    vbool<N> out0, out1;
+    vbool<N> out0;
     const vbool<N> in0 = (lo >= tmin) & (lo <= tmax), in1 = (hi >= tmin) & (hi <= tmax);
-    const vbool<N> und0 = in0 & boxTest(lo, out0);
-    const vbool<N> und1 = in1 & boxTest(hi, out1);
+    const vbool<N> und0 = in0 & boxTest(lo, &out0);
+    const vbool<N> und1 = in1 & boxTest(hi, nullptr);
     const vbool<N> boxUndecided = und0 | AndNot(und1, AndNot(in0, out0));  // lo undecided, or not a hit and hi undecided
     refine = AndNot(lanes & (cold | needs(t0, e0) | needs(t1, e1) | boxUndecided), miss);
   }

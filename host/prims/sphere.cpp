@@ -8,6 +8,12 @@
 #include "host/scene/nff.h"
 
 namespace cr {
+namespace sphere_fp64 {
+#define CR_FP64
+#include "kernels/ray.h"
+#include "kernels/sphere.h"
+#undef CR_FP64
+}  // namespace sphere_fp64
 
 using ref::D3;
 
@@ -75,40 +81,17 @@ void RefBounds(const Sphere& s, glm::dvec3& lo, glm::dvec3& hi)
 
 namespace {
 
-double TwoSum(double a, double b, double& e)
-{
-  const double s = a + b, bb = s - a;
-  e = (a - (s - bb)) + (b - bb);
-  return s;
-}
-
 // |o - centre|^2 - r^2 in double without the cancellation of |f|^2 against
 // r^2 that a ground sphere seen from just above it makes (r = 1e6, 6e-7
-// above: both 1e12, their difference 1.2): f = o - centre as exact pairs
-// (TwoSum), the squares and cross terms as exact products (fma), summed by
-// SumK with K = 3 (Ogita, Rump & Oishi 2005; the kernels' Sphere_CAccurate
-// does the same with Rt_SumK4). The plain double form erred by 2e-4 there, enough to put the
+// above: both 1e12, their difference 1.2): the kernels' Sphere_CAccurate
+// compiled with real = double (f = o - centre as exact pairs, the squares,
+// cross terms and r^2 as exact products, summed by SumK, Ogita, Rump &
+// Oishi 2005). The plain double form erred by 2e-4 there, enough to put the
 // reference's root 2e-8 (twice the checker's tolerance) from the true one.
 double SphereC(const glm::dvec3& o, const Sphere& s)
 {
-  double p[17];
-  for (int i = 0; i < 3; ++i) {
-    double fl;
-    const double fh = TwoSum(o[i], -double(s.center[i]), fl);
-    p[5 * i] = fh * fh;
-    p[5 * i + 1] = std::fma(fh, fh, -p[5 * i]);
-    p[5 * i + 2] = 2.0 * fh * fl;
-    p[5 * i + 3] = std::fma(2.0 * fh, fl, -p[5 * i + 2]);
-    p[5 * i + 4] = fl * fl;
-  }
-  const double r = s.radius;
-  p[15] = -(r * r);
-  p[16] = -std::fma(r, r, p[15]);  // -(r^2's rounding error): r^2 = -(p[15] + p[16]) exactly
-  for (int pass = 0; pass < 2; ++pass)
-    for (int i = 1; i < 17; ++i) p[i] = TwoSum(p[i], p[i - 1], p[i - 1]);
-  double sum = 0.0;
-  for (int i = 0; i < 16; ++i) sum += p[i];
-  return sum + p[16];
+  const double org[3] = {o.x, o.y, o.z};
+  return sphere_fp64::Sphere_CAccurate(org, &s);
 }
 
 }  // namespace
