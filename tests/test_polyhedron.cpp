@@ -178,8 +178,5 @@ TEST_CASE("polyhedron: OpenCL, every structure, robust and fp64 against the refe
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/polyhedra.nff"));
   Scene hard;
   ParseNFF(HardScene(), "hard-polyhedra", hard);
-  for (Precision p : {Precision::Robust, Precision::Fp64}) {
-    test::CheckConformance(scene, "polyhedra", Backend::OpenCL, p, 24);
-    test::CheckConformance(hard, "hard", Backend::OpenCL, p, 24);
-  }
+  test::CheckOpenCLConformance({{"polyhedra", &scene}, {"hard", &hard}}, 24);
 }

@@ -139,8 +139,5 @@ TEST_CASE("quadric: OpenCL, every structure, robust and fp64 against the referen
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/quadrics.nff"));
   Scene hard;
   ParseNFF(kHardScene, "hard-quadrics", hard);
-  for (Precision p : {Precision::Robust, Precision::Fp64}) {
-    test::CheckConformance(scene, "quadrics", Backend::OpenCL, p, 24);
-    test::CheckConformance(hard, "hard", Backend::OpenCL, p, 24);
-  }
+  test::CheckOpenCLConformance({{"quadrics", &scene}, {"hard", &hard}}, 24);
 }

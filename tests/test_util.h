@@ -6,11 +6,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <initializer_list>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <doctest/doctest.h>
@@ -209,6 +211,20 @@ inline void CheckConformance(const Scene& scene, const std::string& name, Backen
       if (precision != Precision::Fast) CHECK(r.wrong == 0);
       else if (r.wrong) MESSAGE("reported, not asserted: ", what);
     }
+  }
+}
+
+// A primitive's OpenCL conformance, robust and fp64, on its scenes (name,
+// scene). Robust runs the programs specialised to each scene's types (what
+// `cellray trace` builds); fp64 the every-type programs
+// (CELLRAY_CL_TYPES=all) that the hard-case suite builds too: the same
+// primitive code, and 8 fewer PoCL compiles per primitive in a fresh CI
+// (about 25 s of CPU each time). The caller opens the program cache.
+inline void CheckOpenCLConformance(std::initializer_list<std::pair<const char*, const Scene*>> scenes, int size)
+{
+  for (Precision p : {Precision::Robust, Precision::Fp64}) {
+    ScopedEnv types("CELLRAY_CL_TYPES", p == Precision::Fp64 ? "all" : "scene");
+    for (const auto& [name, scene] : scenes) CheckConformance(*scene, name, Backend::OpenCL, p, size);
   }
 }
 
