@@ -17,9 +17,11 @@
  * mode's double-float c (48 bits of |f|^2) erred by 3e-4 there, fp64 mode's
  * double (f rounded) by 2e-4: roots 2e-8 off, twice the checker's
  * tolerance. The cold path of both modes (2^20 diffuse rays of
- * scenes/scale/mixed-scales.nff found it). A call of its own (CR_COLD):
- * inlined into fp64 mode's sphere test it cost 14 VGPRs on gfx906. */
-CR_COLD CR_FUNC real Sphere_CAccurate(const real org[3], const Sphere* s)
+ * scenes/scale/mixed-scales.nff found it). Inline: in fp64 mode's sphere
+ * test it costs 14 VGPRs on gfx906 (111 -> 125 in the grid kernels with
+ * spheres, still 2 waves); as a call (CR_COLD) a 160-byte frame in scratch,
+ * which the GPU compile table's goal rules out. */
+CR_FUNC real Sphere_CAccurate(const real org[3], const Sphere* s)
 {
   real p[17];
   CR_UNROLL for (int i = 0; i < 3; ++i) {
