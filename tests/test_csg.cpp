@@ -218,11 +218,6 @@ TEST_CASE("csg: SIMD answers equal the scalar kernels' bit for bit (robust, sing
 
 TEST_CASE("csg: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!test::HaveOpenCLDevice()) {
-    MESSAGE("SKIPPED: no OpenCL device");
-    return;
-  }
-  auto cache = test::OpenCLTestCacheDir();
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/csg.nff"));
   test::CheckOpenCLConformance({{"csg", &scene}}, 24);
 }

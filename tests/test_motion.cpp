@@ -147,10 +147,7 @@ TEST_CASE("motion blur: rays with times, every structure x backend, robust and f
       CHECK(rays.size() > 500u);
       for (Backend backend : backends)
         for (Precision precision : {Precision::Robust, Precision::Fp64}) {
-          // OpenCL: fp64 with the every-type programs, which both scenes
-          // share (8 PoCL compiles fewer in a fresh CI; robust keeps each
-          // scene's own; test::CheckOpenCLConformance).
-          test::ScopedEnv types("CELLRAY_CL_TYPES", precision == Precision::Fp64 ? "all" : "scene");
+          const auto types = test::ConformanceProgramTypes(precision);  // OpenCL: both scenes share fp64's
           for (AccelKind accel : kAccelKinds) {
             TraceConfig cfg;
             cfg.backend = backend;

@@ -170,11 +170,6 @@ TEST_CASE("polyhedron: SIMD answers equal the scalar kernels' bit for bit (robus
 
 TEST_CASE("polyhedron: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!test::HaveOpenCLDevice()) {
-    MESSAGE("SKIPPED: no OpenCL device");
-    return;
-  }
-  auto cache = test::OpenCLTestCacheDir();
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/polyhedra.nff"));
   Scene hard;
   ParseNFF(HardScene(), "hard-polyhedra", hard);

@@ -131,11 +131,6 @@ TEST_CASE("quadric: SIMD answers equal the scalar kernels' bit for bit (robust a
 
 TEST_CASE("quadric: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!test::HaveOpenCLDevice()) {
-    MESSAGE("SKIPPED: no OpenCL device");
-    return;
-  }
-  auto cache = test::OpenCLTestCacheDir();
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/quadrics.nff"));
   Scene hard;
   ParseNFF(kHardScene, "hard-quadrics", hard);

@@ -204,11 +204,6 @@ TEST_CASE("sdf: SIMD answers equal the scalar kernels' bit for bit (robust and f
 
 TEST_CASE("sdf: OpenCL, every structure, robust and fp64 against the reference")
 {
-  if (!test::HaveOpenCLDevice()) {
-    MESSAGE("SKIPPED: no OpenCL device");
-    return;
-  }
-  auto cache = test::OpenCLTestCacheDir();
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/geometry/sdf.nff"));
   test::CheckOpenCLConformance({{"sdf", &scene}}, 24);
 }

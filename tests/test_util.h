@@ -214,20 +214,6 @@ inline void CheckConformance(const Scene& scene, const std::string& name, Backen
   }
 }
 
-// A primitive's OpenCL conformance, robust and fp64, on its scenes (name,
-// scene). Robust runs the programs specialised to each scene's types (what
-// `cellray trace` builds); fp64 the every-type programs
-// (CELLRAY_CL_TYPES=all) that the hard-case suite builds too: the same
-// primitive code, and 8 fewer PoCL compiles per primitive in a fresh CI
-// (about 25 s of CPU each time). The caller opens the program cache.
-inline void CheckOpenCLConformance(std::initializer_list<std::pair<const char*, const Scene*>> scenes, int size)
-{
-  for (Precision p : {Precision::Robust, Precision::Fp64}) {
-    ScopedEnv types("CELLRAY_CL_TYPES", p == Precision::Fp64 ? "all" : "scene");
-    for (const auto& [name, scene] : scenes) CheckConformance(*scene, name, Backend::OpenCL, p, size);
-  }
-}
-
 // Renders `scene` with a tracer of the given backend and structure.
 inline Image RenderWith(const Scene& scene, Backend backend, AccelKind accel, const RenderOptions& ro,
                         RenderStats* st = nullptr)
@@ -251,6 +237,32 @@ inline bool HaveOpenCLDevice()
     }
   }();
   return have;
+}
+
+// The OpenCL programs a conformance check of `precision` runs: robust the
+// ones specialised to the scene's types (what `cellray trace` builds), fp64
+// the every-type programs (CELLRAY_CL_TYPES=all) that the hard-case suite
+// builds too: the same primitive code, and 8 fewer PoCL compiles per type
+// set in a fresh CI (about 25 s of CPU each time).
+inline ScopedEnv ConformanceProgramTypes(Precision precision)
+{
+  return ScopedEnv("CELLRAY_CL_TYPES", precision == Precision::Fp64 ? "all" : "scene");
+}
+
+// A primitive's OpenCL conformance, robust and fp64, on its scenes (name,
+// scene), with the tests' program cache; a message, no check, without an
+// OpenCL device.
+inline void CheckOpenCLConformance(std::initializer_list<std::pair<const char*, const Scene*>> scenes, int size)
+{
+  if (!HaveOpenCLDevice()) {
+    MESSAGE("SKIPPED: no OpenCL device");
+    return;
+  }
+  const auto cache = OpenCLTestCacheDir();
+  for (Precision p : {Precision::Robust, Precision::Fp64}) {
+    const auto types = ConformanceProgramTypes(p);
+    for (const auto& [name, scene] : scenes) CheckConformance(*scene, name, Backend::OpenCL, p, size);
+  }
 }
 
 // The SIMD backend (single and packet) answers as the scalar kernels do, bit
