@@ -107,26 +107,20 @@ CR_FUNC int Triangle_LongEdgeUndecided(uint flags, real nA, real nB, real nC, re
          ((flags & CR_TRI_LONG_V) && fabs(V) <= 0x1.0p-18f * (nC * nA)) ||
          ((flags & CR_TRI_LONG_W) && fabs(W) <= 0x1.0p-18f * (nA * nB));
 }
-/* Triangle_Intersect's cold path for a hit whose t may lie in range with the
- * origin near the plane (Triangle_PlaneNeedsDf; A, B, C the vertices minus
- * the origin, U, V, W the float edge functions): the edges again in
- * double-float when all three lie within their rounding (Triangle_EdgesDf),
- * then t from Triangle_PlaneTDf. Returns 0 when the edges now miss. The
- * SIMD backend calls it lane by lane with the same A, B, C. */
-CR_COLD CR_FUNC int Triangle_NearPlaneRefine(const Ray* r, const Triangle* tri, const real A[3], const real B[3],
-                                             const real C[3], real* U, real* V, real* W, real* t)
+/* Triangle_Intersect's cold path for a float hit whose three edge functions
+ * all lie within their rounding (Triangle_EdgesUndecided): the triangle's
+ * projection is below float's resolution at its distance from the ray
+ * origin (a small triangle far away, or one seen edge-on), where two edges
+ * can round to 0 and the third not: an "inside" at the plane's crossing,
+ * however far that lies from the triangle. The three edges again in
+ * double-float (Triangle_EdgesDf). Returns 0 when they now miss. The SIMD
+ * backend calls it lane by lane. */
+CR_COLD CR_FUNC int Triangle_DegenerateRefine(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
 {
-  const int kx = r->kx, ky = r->ky, kz = r->kz;
-  if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
-                              Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
-                              Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), *U, *V, *W)) {
-    Triangle_EdgesDf(r, tri, U, V, W);
-    if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
-      return 0;
-    if (*U + *V + *W == (real)0.0f) return 0;
-  }
-  *t = Triangle_PlaneTDf(r->org, r->dir, tri);
-  return 1;
+  Triangle_EdgesDf(r, tri, U, V, W);
+  if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
+    return 0;
+  return *U + *V + *W != (real)0.0f;
 }
 CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real nA, real nB, real nC, real* U,
                                           real* V, real* W)
@@ -237,6 +231,21 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
     return 0;
   real det = U + V + W;
   if (det == (real)0.0f) return 0;
+#ifndef CR_FP64
+  /* Float hits only (a rule that fired on misses too would cost every test
+   * the three norms). With all three edges below their rounding the ray
+   * passes within float's resolution of the whole triangle or nowhere near
+   * it: a true hit is marginal (inside the ray's tolerance, and no ray from
+   * inside a mesh sees one), a false one can lie anywhere on the plane
+   * (docs/TOLERANCE.md). A neighbour deciding the shared edge in float may
+   * then disagree with this one, on marginal rays only. */
+  if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
+                              Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
+                              Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), U, V, W)) {
+    if (!Triangle_DegenerateRefine(r, tri, &U, &V, &W)) return 0;
+    det = U + V + W;
+  }
+#endif
   /* The distance along the ray comes from the triangle's plane, not from
    * T / det: on a sliver det (twice the projected area) is small beside the
    * rounding of U, V, W, and T / det errs in proportion to the aspect ratio
@@ -255,23 +264,13 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
   const real np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
   real t = ((np0 + np1) + np2) / nd;
 #ifndef CR_FP64
-  if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) {
-    /* The origin near the triangle's plane relative to the shared vertex's
-     * distance, and t may lie in [tmin, tmax] (elsewhere the float t is out
-     * of range too, and the test misses whatever the edges say). A float
-     * hit whose three edge functions all lie within their rounding then may be a small triangle seen edge-on from far away, its
-     * projection degenerate (two can round to 0 and the third not: an
-     * "inside" at the plane's crossing, far from the triangle): the three
-     * edges again in double-float. Only then: a rule that fired on one edge
-     * of a hit would decide that edge differently from the neighbour that
-     * shares it (which missed, in float, on that edge) and could let a ray
-     * through; with all three edges below their rounding the hit is
-     * marginal anyway, and no ray from inside a mesh sees one. Away from
-     * the plane the crossing lies within a few ulps of the distance of the
-     * triangle, and the float answer stands (docs/TOLERANCE.md). */
-    if (!Triangle_NearPlaneRefine(r, tri, A, B, C, &U, &V, &W, &t)) return 0;
-    det = U + V + W;
-  }
+  /* The origin near the triangle's plane relative to the shared vertex's
+   * distance, and t may lie in [tmin, tmax] (elsewhere the float t is out of
+   * range too, and the test misses whatever the edges say): t in
+   * double-float. Away from the plane the crossing lies within a few ulps
+   * of the distance of the triangle, and the float t stands
+   * (docs/TOLERANCE.md). */
+  if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
 #endif
   if (!(t >= tmin && t <= tmax)) return 0;
   const real invDet = (real)1.0f / det;

@@ -247,43 +247,21 @@ __attribute__((noinline, cold)) EdgeFunctions<N> Triangle_EdgeLanesN(unsigned bi
 }
 
 // Lanes near their triangle's plane whose t may lie in range: the scalar
-// kernels' Triangle_NearPlaneRefine lane by lane (the edges in double-float
-// when all three lie within their rounding, then t in double-float), with
-// the translated vertices computed as there (the same subtractions as the
-// vector ones, so the same bits). Out of line: the hot caller keeps no
-// translated vertex alive past the edge functions for it.
-template <int N>
-struct NearPlaneLanes {
-  vfloat<N> U, V, W, t;
-  vbool<N> miss;
-};
+// kernels' Triangle_PlaneTDf lane by lane. Out of line and cold.
 template <int N, class PlaneFn>
-__attribute__((noinline, cold)) NearPlaneLanes<N> Triangle_NearPlaneLanesN(unsigned bits, PlaneFn plane,
-                                                                           const vfloat<N> org[3],
-                                                                           const vfloat<N> dir[3], vfloat<N> U,
-                                                                           vfloat<N> V, vfloat<N> W, vfloat<N> t,
-                                                                           vbool<N> miss)
+__attribute__((noinline, cold)) vfloat<N> Triangle_NearPlaneLanesN(unsigned bits, PlaneFn plane,
+                                                                   const vfloat<N> org[3], const vfloat<N> dir[3],
+                                                                   vfloat<N> t)
 {
-  alignas(32) float u[N], v[N], w[N], tt[N];
-  U.Store(u);
-  V.Store(v);
-  W.Store(w);
+  alignas(32) float tt[N];
   t.Store(tt);
-  unsigned missBits = 0;
   for (; bits; bits &= bits - 1) {
     const int l = LowestBit(bits);
     const Ray ray = LaneRay<N>(org, dir, l);
     const Triangle tri = plane.Tri(l);
-    float A[3], B[3], C[3];
-    for (int i = 0; i < 3; ++i) {
-      A[i] = tri.v0[i] - ray.org[i];
-      B[i] = tri.v1[i] - ray.org[i];
-      C[i] = tri.v2[i] - ray.org[i];
-    }
-    if (!Triangle_NearPlaneRefine(&ray, &tri, A, B, C, &u[l], &v[l], &w[l], &tt[l])) missBits |= 1u << l;
+    tt[l] = Triangle_PlaneTDf(ray.org, ray.dir, &tri);
   }
-  return {vfloat<N>::Load(u), vfloat<N>::Load(v), vfloat<N>::Load(w), vfloat<N>::Load(tt),
-          miss | vbool<N>::FromBits(missBits)};
+  return vfloat<N>::Load(tt);
 }
 
 // Robust Triangle_Intersect (Woop, Benthin & Wald 2013) after the
@@ -337,27 +315,46 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     tHit = uHit = vHit = zero;
     return vbool<N>(false);
   }
+  // Float hits whose three edge functions all lie within their rounding
+  // (Triangle_EdgesUndecided: a projection below float's resolution) take
+  // the scalar kernels' Triangle_DegenerateRefine, lane by lane: its edges in
+  // double-float, then the same sign and zero tests as above.
+  {
+    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
+    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
+    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
+    const vfloat<N> k(0x1.0p-19f);
+    const unsigned degenerate =
+        AndNot((Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB)), miss).Bits();
+    if (degenerate) {
+      const EdgeFunctions<N> e = Triangle_EdgeLanesN<N>(
+          degenerate, plane, org, dir, U, V, W,
+          [](const Ray& ray, const Triangle& tri, int, float* u, float* v, float* w) {
+            Triangle_EdgesDf(&ray, &tri, u, v, w);
+          });
+      U = e.U;
+      V = e.V;
+      W = e.W;
+      miss = miss | (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero)));
+      det = U + V + W;
+      miss = miss | (det == zero);
+      if (All(miss)) {
+        tHit = uHit = vHit = zero;
+        return vbool<N>(false);
+      }
+    }
+  }
   // t from the triangle's plane, as kernels/triangle.h computes it (in world
   // axis order, which the sums' rounding depends on). Where n . p cancels
-  // (the origin near the plane: Triangle_PlaneInexact), as there: float hits
-  // whose three edge functions all lie within their rounding
-  // (Triangle_EdgesUndecided) take the scalar kernels' Triangle_EdgesDf, and
-  // lanes whose t may lie in [tmin, tmax] Triangle_PlaneTDf, lane by lane.
-  // Only lanes whose t may lie in range need either: elsewhere the float t
-  // is out of range too, and the lane misses whatever the edges say (a
-  // shadow ray leaving a face, t just behind its origin, stays here).
+  // (the origin near the plane: Triangle_PlaneInexact) and t may lie in
+  // [tmin, tmax], as there: Triangle_PlaneTDf, lane by lane. Only lanes whose
+  // t may lie in range need it: elsewhere the float t is out of range too,
+  // and the lane misses (a shadow ray leaving a face, t just behind its
+  // origin, stays here).
   vbool<N> nearPlane;
   vfloat<N> t = plane.T(org, dir, miss, tmin, tmax, nearPlane);
   nearPlane = AndNot(nearPlane, miss);
-  if (Any(nearPlane)) {
-    const NearPlaneLanes<N> r = Triangle_NearPlaneLanesN<N>(nearPlane.Bits(), plane, org, dir, U, V, W, t, miss);
-    U = r.U;
-    V = r.V;
-    W = r.W;
-    t = r.t;
-    miss = r.miss;
-    det = U + V + W;
-  }
+  if (Any(nearPlane)) t = Triangle_NearPlaneLanesN<N>(nearPlane.Bits(), plane, org, dir, t);
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;
   uHit = V * invDet;

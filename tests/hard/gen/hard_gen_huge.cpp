@@ -482,6 +482,60 @@ HardCase FarOrigins(const GenOptions& o)
   return c;
 }
 
+// Tiny triangles (1e-3..1e-2 across) standing on a ground sphere of radius
+// 1e5, rays from 1e4..1e5 away: at the rays' origins float's spacing exceeds
+// the triangles, v - o rounds their vertices together and the float edge
+// functions are all noise (two can be exactly 0 and the third not: Woop's
+// test reads "inside" at the plane's crossing, which can lie anywhere). A
+// uniform grid or octree tests them whenever the ray crosses the coarse cell
+// they share with the ground. Found by bench/stress_scales.py (seed 3: a
+// false hit 3e4 from a triangle 1e-3 across).
+HardCase TinyTrianglesFar(const GenOptions& o)
+{
+  Rng rng(506);
+  SceneBuilder b;
+  b.Sphere({0, -1e5, 0}, 1e5);
+  struct Tri {
+    glm::dvec3 c, n;
+    double size;
+  };
+  std::vector<Tri> tris;
+  for (int i = 0; i < 60; ++i) {
+    const double size = std::exp(rng.Uniform(std::log(1e-3), std::log(1e-2)));
+    const glm::dvec3 c = rng.InBox({-300, 0.5, -300}, {300, 5, 300});
+    const glm::dvec3 v0 = c + rng.UnitVector() * size, v1 = c + rng.UnitVector() * size,
+                     v2 = c + rng.UnitVector() * size;
+    b.Triangle(v0, v1, v2);
+    tris.push_back({c, glm::normalize(glm::cross(v1 - v0, v2 - v0)), size});
+  }
+  HardCase c;
+  c.name = "huge/tiny-triangles-far";
+  c.scene = b.Finish();
+  c.expect = Expect::Reference;
+  const std::size_t n = o.quick ? 4000 : 40000;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Tri& t = tris[rng.Below(std::uint32_t(tris.size()))];
+    const double dist = std::exp(rng.Uniform(std::log(1e4), std::log(1e5)));
+    glm::dvec3 up = rng.UnitVector();
+    up.y = std::abs(up.y);
+    const glm::dvec3 org = t.c + dist * up;
+    glm::dvec3 at;
+    switch (k % 4) {
+      case 0: at = org + rng.UnitVector(); break;                                    // anywhere
+      case 1: at = t.c + rng.UnitVector() * (t.size * rng.Uniform(0.0, 2.0)); break;  // at the triangle
+      case 2: {  // a point of its plane 10..3e4 away: the crossing a false hit reports
+        glm::dvec3 a = rng.UnitVector();
+        a = glm::normalize(a - glm::dot(a, t.n) * t.n);
+        at = t.c + a * std::exp(rng.Uniform(std::log(10.0), std::log(3e4)));
+        break;
+      }
+      default: at = t.c + rng.UnitVector() * std::exp(rng.Uniform(0.0, std::log(1e3)));  // near it
+    }
+    c.rays.push_back(Rec(org, at - org));
+  }
+  return c;
+}
+
 }  // namespace
 
 void AddHugeCases(std::vector<CaseSpec>& specs)
@@ -544,6 +598,12 @@ void AddHugeCases(std::vector<CaseSpec>& specs)
                    "at random and at the triangles: each triangle seen edge-on from far away, where every edge "
                    "function lies below its rounding. Expect: the reference's answer under check.h's tolerance.",
                    false, [](AccelKind, const GenOptions& o) { return FarOrigins(o); }});
+  specs.push_back({"huge/tiny-triangles-far", "huge",
+                   "60 triangles 1e-3..1e-2 across standing on a ground sphere of radius 1e5; rays from 1e4..1e5 "
+                   "away, at random, at the triangles, near them, and at points of their planes 10..3e4 from them "
+                   "(where float, its vertices rounded together, can read a hit at the plane's crossing). Expect: "
+                   "the reference's answer under check.h's tolerance.",
+                   false, [](AccelKind, const GenOptions& o) { return TinyTrianglesFar(o); }});
   specs.push_back({"huge/mixed-scales", "huge",
                    std::string("Spheres of radius 1e-4, triangles 2e-4 across and cylinders of radius 1e-4 standing on a "
                                "ground sphere of radius 1e6, next to a tilted triangle 1e6 across; cameras 0.01..1 "
