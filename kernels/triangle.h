@@ -107,20 +107,27 @@ CR_FUNC int Triangle_LongEdgeUndecided(uint flags, real nA, real nB, real nC, re
          ((flags & CR_TRI_LONG_V) && fabs(V) <= 0x1.0p-18f * (nC * nA)) ||
          ((flags & CR_TRI_LONG_W) && fabs(W) <= 0x1.0p-18f * (nA * nB));
 }
-/* Triangle_Intersect's cold path for a float hit whose three edge functions
- * all lie within their rounding (Triangle_EdgesUndecided): the triangle's
- * projection is below float's resolution at its distance from the ray
- * origin (a small triangle far away, or one seen edge-on), where two edges
- * can round to 0 and the third not: an "inside" at the plane's crossing,
- * however far that lies from the triangle. The three edges again in
- * double-float (Triangle_EdgesDf). Returns 0 when they now miss. The SIMD
- * backend calls it lane by lane. */
-CR_COLD CR_FUNC int Triangle_DegenerateRefine(const Ray* r, const Triangle* tri, real* U, real* V, real* W)
+/* Triangle_Intersect's cold path, one call for both of its refinements.
+ * `degenerate`: a float hit whose three edge functions all lie within their
+ * rounding (Triangle_EdgesUndecided): the triangle's projection is below
+ * float's resolution at its distance from the ray origin (a small triangle
+ * far away, or one seen edge-on), where two edges can round to 0 and the
+ * third not: an "inside" at the plane's crossing, however far that lies
+ * from the triangle. The three edges again in double-float
+ * (Triangle_EdgesDf); returns 0 when they now miss. `nearPlane`
+ * (Triangle_PlaneNeedsDf): t from Triangle_PlaneTDf. The SIMD backend runs
+ * the two lane by lane (Triangle_EdgesDf, then the same tests). */
+CR_COLD CR_FUNC int Triangle_HitRefine(const Ray* r, const Triangle* tri, int degenerate, int nearPlane, real* U,
+                                       real* V, real* W, real* t)
 {
-  Triangle_EdgesDf(r, tri, U, V, W);
-  if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
-    return 0;
-  return *U + *V + *W != (real)0.0f;
+  if (degenerate) {
+    Triangle_EdgesDf(r, tri, U, V, W);
+    if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
+      return 0;
+    if (*U + *V + *W == (real)0.0f) return 0;
+  }
+  if (nearPlane) *t = Triangle_PlaneTDf(r->org, r->dir, tri);
+  return 1;
 }
 CR_COLD CR_FUNC void Triangle_RefineEdges(const Ray* r, const Triangle* tri, real nA, real nB, real nC, real* U,
                                           real* V, real* W)
@@ -237,14 +244,13 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
    * passes within float's resolution of the whole triangle or nowhere near
    * it: a true hit is marginal (inside the ray's tolerance, and no ray from
    * inside a mesh sees one), a false one can lie anywhere on the plane
-   * (docs/TOLERANCE.md). A neighbour deciding the shared edge in float may
-   * then disagree with this one, on marginal rays only. */
-  if (Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
-                              Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
-                              Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)), U, V, W)) {
-    if (!Triangle_DegenerateRefine(r, tri, &U, &V, &W)) return 0;
-    det = U + V + W;
-  }
+   * (docs/TOLERANCE.md; Triangle_HitRefine below). A neighbour deciding the
+   * shared edge in float may then disagree with this one, on marginal rays
+   * only. */
+  const int degenerate = Triangle_EdgesUndecided(Triangle_Norm1(CR_PICK3(A, kx), CR_PICK3(A, ky), CR_PICK3(A, kz)),
+                                                 Triangle_Norm1(CR_PICK3(B, kx), CR_PICK3(B, ky), CR_PICK3(B, kz)),
+                                                 Triangle_Norm1(CR_PICK3(C, kx), CR_PICK3(C, ky), CR_PICK3(C, kz)),
+                                                 U, V, W);
 #endif
   /* The distance along the ray comes from the triangle's plane, not from
    * T / det: on a sliver det (twice the projected area) is small beside the
@@ -270,7 +276,13 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
    * double-float. Away from the plane the crossing lies within a few ulps
    * of the distance of the triangle, and the float t stands
    * (docs/TOLERANCE.md). */
-  if (Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax)) t = Triangle_PlaneTDf(r->org, r->dir, tri);
+  const int nearPlane = Triangle_PlaneNeedsDf(np0, np1, np2, nd, t, tmin, tmax);
+  /* One call site for both refinements (on gfx906 each call site costs
+   * registers and a frame). */
+  if (degenerate | nearPlane) {
+    if (!Triangle_HitRefine(r, tri, degenerate, nearPlane, &U, &V, &W, &t)) return 0;
+    det = U + V + W;
+  }
 #endif
   if (!(t >= tmin && t <= tmax)) return 0;
   const real invDet = (real)1.0f / det;

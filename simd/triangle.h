@@ -246,8 +246,9 @@ __attribute__((noinline, cold)) EdgeFunctions<N> Triangle_EdgeLanesN(unsigned bi
   return {vfloat<N>::Load(u), vfloat<N>::Load(v), vfloat<N>::Load(w)};
 }
 
-// Lanes near their triangle's plane whose t may lie in range: the scalar
-// kernels' Triangle_PlaneTDf lane by lane. Out of line and cold.
+// Lanes near their triangle's plane whose t may lie in range: the second
+// half of the scalar kernels' Triangle_HitRefine (Triangle_PlaneTDf) lane by
+// lane. Out of line and cold.
 template <int N, class PlaneFn>
 __attribute__((noinline, cold)) vfloat<N> Triangle_NearPlaneLanesN(unsigned bits, PlaneFn plane,
                                                                    const vfloat<N> org[3], const vfloat<N> dir[3],
@@ -317,8 +318,10 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   }
   // Float hits whose three edge functions all lie within their rounding
   // (Triangle_EdgesUndecided: a projection below float's resolution) take
-  // the scalar kernels' Triangle_DegenerateRefine, lane by lane: its edges in
-  // double-float, then the same sign and zero tests as above.
+  // the first half of the scalar kernels' Triangle_HitRefine, lane by lane:
+  // the edges in double-float (Triangle_EdgesDf), then the same sign and zero
+  // tests as above. (The scalar code tests these after t; a lane that misses
+  // here would miss there, so the answers are the same.)
   {
     const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
     const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
