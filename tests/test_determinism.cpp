@@ -82,14 +82,19 @@ std::vector<Config> Configs()
   return out;
 }
 
-// Creates the tracer and traces with at most `threads` oneTBB threads.
-std::vector<HitRecord> TraceWithThreads(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
-                                        bool occlusion, int threads)
+// Builds a tracer with at most `threads` oneTBB threads (the structure's
+// build is threaded too).
+std::unique_ptr<Tracer> BuildWithThreads(const Scene& scene, const TraceConfig& cfg, int threads)
 {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  auto tracer = CreateTracer(scene, cfg);
+  return CreateTracer(scene, cfg);
+}
+// Traces with at most `threads` oneTBB threads.
+std::vector<HitRecord> TraceWithThreads(Tracer& tracer, const std::vector<RayRecord>& rays, bool occlusion, int threads)
+{
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   std::vector<HitRecord> hits;
-  tracer->Trace(rays, hits, occlusion, nullptr);
+  tracer.Trace(rays, hits, occlusion, nullptr);
   return hits;
 }
 
@@ -131,20 +136,25 @@ TEST_CASE("determinism: every backend answers bit-identically across runs and wi
       closest.insert(closest.end(), r.begin(), r.end());
     }
     const std::vector<RayRecord> shadow = test::MakeRays(scene, RayKind::Shadow, 48);
-    for (const Config& c : configs)
+    for (const Config& c : configs) {
+      // Two tracers, built with 1 and with 2 threads; each traces twice
+      // (a second call must not see state left by the first).
+      const auto one = BuildWithThreads(scene, c.cfg, 1), two = BuildWithThreads(scene, c.cfg, 2);
       for (bool occlusion : {false, true}) {
         const auto& rays = occlusion ? shadow : closest;
-        const auto first = TraceWithThreads(scene, c.cfg, rays, occlusion, 1);
+        const auto first = TraceWithThreads(*one, rays, occlusion, 1);
         REQUIRE(first.size() == rays.size());
         INFO(name, " ", c.name, occlusion ? " occlusion" : " closest");
-        CHECK(SameBytes(first, TraceWithThreads(scene, c.cfg, rays, occlusion, 2)));
-        CHECK(SameBytes(first, TraceWithThreads(scene, c.cfg, rays, occlusion, 2)));
-        CHECK(SameBytes(first, TraceWithThreads(scene, c.cfg, rays, occlusion, 1)));
+        CHECK(SameBytes(first, TraceWithThreads(*two, rays, occlusion, 2)));
+        CHECK(SameBytes(first, TraceWithThreads(*two, rays, occlusion, 2)));
+        CHECK(SameBytes(first, TraceWithThreads(*one, rays, occlusion, 2)));
+        CHECK(SameBytes(first, TraceWithThreads(*one, rays, occlusion, 1)));
         ++sets;
       }
+    }
   }
-  MESSAGE(sets, " answer sets (", configs.size(), " backend configurations x 3 scenes x 2 queries), each traced 4 "
-          "times with 1, 2, 2, 1 threads: bit-identical");
+  MESSAGE(sets, " answer sets (", configs.size(), " backend configurations x 3 scenes x 2 queries), each traced 5 "
+          "times (tracers built with 1 and 2 threads, tracing with 1, 2, 2, 2, 1): bit-identical");
 }
 
 TEST_CASE("determinism: the binary writes identical rays, hits and images with --threads 1 and 2")
