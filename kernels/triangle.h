@@ -9,6 +9,13 @@
 #define CR_HAS_TRIANGLE 1
 #endif
 
+/* Woop's inside test: the edge functions U, V, W have mixed signs (an edge
+ * function of exactly 0 counts as inside for both neighbours). */
+CR_FUNC int Triangle_EdgesMiss(real U, real V, real W)
+{
+  return (U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f);
+}
+
 #if !defined(CR_FAST) && !defined(CR_FP64)
 /* The distance to the triangle's plane in double-float, from the exact edges
  * v1 - v0, v2 - v0 and the exact v0 - o: the cold path of Triangle_Intersect
@@ -122,9 +129,7 @@ CR_COLD CR_FUNC int Triangle_HitRefine(const Ray* r, const Triangle* tri, int de
 {
   if (degenerate) {
     Triangle_EdgesDf(r, tri, U, V, W);
-    if ((*U < (real)0.0f || *V < (real)0.0f || *W < (real)0.0f) && (*U > (real)0.0f || *V > (real)0.0f || *W > (real)0.0f))
-      return 0;
-    if (*U + *V + *W == (real)0.0f) return 0;
+    if (Triangle_EdgesMiss(*U, *V, *W) || *U + *V + *W == (real)0.0f) return 0;
   }
   if (nearPlane) *t = Triangle_PlaneTDf(r->org, r->dir, tri);
   return 1;
@@ -234,8 +239,7 @@ CR_FUNC int Triangle_Intersect(const Ray* r, const Triangle* tri, real tmin, rea
     if (Triangle_LongEdgeUndecided(tri->flags, nA, nB, nC, U, V, W)) Triangle_RefineEdges(r, tri, nA, nB, nC, &U, &V, &W);
   }
 #endif
-  if ((U < (real)0.0f || V < (real)0.0f || W < (real)0.0f) && (U > (real)0.0f || V > (real)0.0f || W > (real)0.0f))
-    return 0;
+  if (Triangle_EdgesMiss(U, V, W)) return 0;
   real det = U + V + W;
   if (det == (real)0.0f) return 0;
 #ifndef CR_FP64

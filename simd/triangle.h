@@ -308,7 +308,11 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     }
   }
   const vfloat<N> zero(0.0f);
-  vbool<N> miss = (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero))) | !lanes;
+  // Triangle_EdgesMiss lane-wise.
+  const auto edgesMiss = [zero](vfloat<N> u, vfloat<N> v, vfloat<N> w) {
+    return ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
+  };
+  vbool<N> miss = edgesMiss(U, V, W) | !lanes;
   vfloat<N> det = U + V + W;
   miss = miss | (det == zero);
   // Most tests miss here: skip the division when all do.
@@ -338,7 +342,7 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
       U = e.U;
       V = e.V;
       W = e.W;
-      miss = miss | (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero)));
+      miss = miss | edgesMiss(U, V, W);
       det = U + V + W;
       miss = miss | (det == zero);
       if (All(miss)) {
