@@ -33,7 +33,7 @@ bool Inside(const BVHNode& b, const glm::dvec3& p)
 
 TEST_CASE("bvh: spatial splits cut references, which still cover their triangles, within the budget")
 {
-  for (const char* name : {"gears", "tree", "balls"}) {
+  for (const std::string& name : test::Scenes({"gears", "tree", "balls"})) {
     CAPTURE(name);
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     AccelInfo mi, hi;
@@ -100,7 +100,7 @@ TEST_CASE("bvh: spatial splits cut references, which still cover their triangles
 
 TEST_CASE("bvh: with spatial splits every backend answers as with object splits, 0 wrong")
 {
-  for (const char* name : {"gears", "tree", "balls"}) {
+  for (const std::string& name : test::Scenes({"gears", "tree", "balls"})) {
     CAPTURE(name);
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Random}) {
