@@ -87,7 +87,11 @@ inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
 // leaf or cell holds its references sorted by unified index, so each type's
 // run is found once per leaf (prim_range.h); a type the scene lacks has an
 // empty run, one comparison per leaf. A moving scene, whatever its types,
-// takes kAllTypes | kMotionBit instead (SelectMotionKernel).
+// takes kAllTypes | kMotionBit instead (SelectMotionKernel). With
+// CELLRAY_SIMD_ALL_TYPES_ONLY (CMake option CELLRAY_SIMD_TYPE_SETS=all, the
+// sanitizer preset's: a third of the ISA units' compile time) every scene
+// runs kAllTypes, whose code holds every type's test and gives the same
+// answers; the ci preset compiles and tests the one-type sets.
 template <unsigned kTypes>
 struct TypesTag {
   static constexpr unsigned kValue = kTypes;
@@ -106,8 +110,10 @@ template <class Pick>
 KernelFn SelectKernel(const KernelKey& key, Pick pick)
 {
   if (key.types == 0) return nullptr;  // no primitives: the tracer answers misses itself
+#if !CELLRAY_SIMD_ALL_TYPES_ONLY
   if (key.types == kSphereBit) return SelectFlags<Pick, kSphereBit>(key, pick);
   if (key.types == kTriangleBit) return SelectFlags<Pick, kTriangleBit>(key, pick);
+#endif
   return SelectFlags<Pick, kAllTypes>(key, pick);
 }
 // The same for a moving scene (key.motion): kAllTypes | kMotionBit, the only

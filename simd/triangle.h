@@ -320,37 +320,6 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
     tHit = uHit = vHit = zero;
     return vbool<N>(false);
   }
-  // Float hits whose three edge functions all lie within their rounding
-  // (Triangle_EdgesUndecided: a projection below float's resolution) take
-  // the first half of the scalar kernels' Triangle_HitRefine, lane by lane:
-  // the edges in double-float (Triangle_EdgesDf), then the same sign and zero
-  // tests as above. (The scalar code tests these after t; a lane that misses
-  // here would miss there, so the answers are the same.)
-  {
-    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
-    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
-    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
-    const vfloat<N> k(0x1.0p-19f);
-    const unsigned degenerate =
-        AndNot((Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB)), miss).Bits();
-    if (degenerate) {
-      const EdgeFunctions<N> e = Triangle_EdgeLanesN<N>(
-          degenerate, plane, org, dir, U, V, W,
-          [](const Ray& ray, const Triangle& tri, int, float* u, float* v, float* w) {
-            Triangle_EdgesDf(&ray, &tri, u, v, w);
-          });
-      U = e.U;
-      V = e.V;
-      W = e.W;
-      miss = miss | edgesMiss(U, V, W);
-      det = U + V + W;
-      miss = miss | (det == zero);
-      if (All(miss)) {
-        tHit = uHit = vHit = zero;
-        return vbool<N>(false);
-      }
-    }
-  }
   // t from the triangle's plane, as kernels/triangle.h computes it (in world
   // axis order, which the sums' rounding depends on). Where n . p cancels
   // (the origin near the plane: Triangle_PlaneInexact) and t may lie in
@@ -362,11 +331,40 @@ CR_SIMD_INLINE vbool<N> Triangle_WatertightN(const vfloat<N> A[3], const vfloat<
   vfloat<N> t = plane.T(org, dir, miss, tmin, tmax, nearPlane);
   nearPlane = AndNot(nearPlane, miss);
   if (Any(nearPlane)) t = Triangle_NearPlaneLanesN<N>(nearPlane.Bits(), plane, org, dir, t);
+  vbool<N> hit = AndNot((t >= tmin) & (t <= tmax), miss);
+  // Hits whose three edge functions all lie within their rounding
+  // (Triangle_EdgesUndecided: a projection below float's resolution) take
+  // the first half of the scalar kernels' Triangle_HitRefine, lane by lane:
+  // the edges in double-float (Triangle_EdgesDf), then the same sign and zero
+  // tests as above. Only hits in range need it (the scalar code refines
+  // before its range test, but a lane out of range misses whatever the
+  // edges say, and t does not depend on them), so the norms are computed
+  // for fewer lanes than every float hit.
+  if (Any(hit)) {
+    const vfloat<N> nA = (Abs(A[0]) + Abs(A[1])) + Abs(A[2]);
+    const vfloat<N> nB = (Abs(B[0]) + Abs(B[1])) + Abs(B[2]);
+    const vfloat<N> nC = (Abs(C[0]) + Abs(C[1])) + Abs(C[2]);
+    const vfloat<N> k(0x1.0p-19f);
+    const unsigned degenerate =
+        ((Abs(U) <= k * (nB * nC)) & (Abs(V) <= k * (nC * nA)) & (Abs(W) <= k * (nA * nB)) & hit).Bits();
+    if (degenerate) {
+      const EdgeFunctions<N> e = Triangle_EdgeLanesN<N>(
+          degenerate, plane, org, dir, U, V, W,
+          [](const Ray& ray, const Triangle& tri, int, float* u, float* v, float* w) {
+            Triangle_EdgesDf(&ray, &tri, u, v, w);
+          });
+      U = e.U;
+      V = e.V;
+      W = e.W;
+      det = U + V + W;
+      hit = AndNot(hit, edgesMiss(U, V, W) | (det == zero));
+    }
+  }
   const vfloat<N> invDet = vfloat<N>(1.0f) / det;
   tHit = t;
   uHit = V * invDet;
   vHit = W * invDet;
-  return AndNot((t >= tmin) & (t <= tmax), miss);
+  return hit;
 }
 
 // Fast Triangle_Intersect (Moller & Trumbore 1997, |det| >= 1e-9).

@@ -25,12 +25,7 @@ struct Result {
 
 fs::path Dir()
 {
-  static fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("cellray_bad_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+  return test::ProcessTempDir("cellray_bad");
 }
 
 std::string Write(const std::string& name, const std::string& text)

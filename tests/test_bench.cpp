@@ -24,7 +24,7 @@ namespace {
 
 fs::path TempDir(const std::string& name)
 {
-  fs::path d = fs::temp_directory_path() / fmt::format("cellray_bench_{}_{}", name, ::getpid());
+  const fs::path d = test::ProcessTempDir("cellray_bench") / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d;

@@ -17,9 +17,7 @@ namespace {
 
 std::string TempPath(const std::string& name)
 {
-  fs::path dir = fs::temp_directory_path() / ("cellray_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+  return (test::ProcessTempDir("cellray_test") / name).string();
 }
 
 void WriteRaw(const std::string& path, const char* magic, std::uint64_t count, const void* payload, std::size_t bytes)

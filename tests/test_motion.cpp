@@ -44,9 +44,7 @@ double TimeCoverage(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& 
 
 std::string TempPath(const std::string& name)
 {
-  fs::path dir = fs::temp_directory_path() / ("cellray_motion_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return (dir / name).string();
+  return (test::ProcessTempDir("cellray_motion") / name).string();
 }
 
 // Many small moving triangles and spheres, each with its own motion, and a

@@ -25,9 +25,7 @@ bool HaveMpirun() { return std::system("command -v mpirun >/dev/null 2>&1") == 0
 
 fs::path Dir()
 {
-  fs::path d = fs::temp_directory_path() / ("cellray_mpi_" + std::to_string(::getpid()));
-  fs::create_directories(d);
-  return d;
+  return test::ProcessTempDir("cellray_mpi");
 }
 
 // Runs cellray with `args` (under mpirun -np n when n > 0); returns the exit code.

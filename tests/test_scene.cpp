@@ -233,8 +233,7 @@ TEST_CASE("OBJ: lines end and comments stop where tinyobjloader sees them (found
   // comments: before the fix, "f 1 2 3#x 99" reached it whole, it read a 4th
   // reference (99) that no check had seen, and the next face read vertex 99
   // out of bounds (ASan heap-buffer-overflow; tests/fuzz/corpus/obj/regress_*).
-  const std::string dir = (std::filesystem::temp_directory_path() / ("cellray_obj_" + std::to_string(::getpid()))).string();
-  std::filesystem::create_directories(dir);
+  const std::string dir = test::ProcessTempDir("cellray_obj").string();
   const std::string path = dir + "/lines.obj";
   const std::string text = "v -1 -1 0\rv 1 -1 0\r\nv 0 1 0\r"  // lines 1-3, three line ends
                            "f 1 2 3#x 99\n"                     // line 4: a comment from '#'

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include <unistd.h>
+
 #include <doctest/doctest.h>
 
 #include "host/cl/cl_device.h"
@@ -89,6 +91,32 @@ inline const std::vector<std::string>& SpdScenes()
   static const std::vector<std::string> names = Scenes({"balls", "gears", "jacks", "lattice", "mount", "rings",
                                                         "shells", "sombrero", "teapot", "tetra", "tree"});
   return names;
+}
+
+// This test process's scratch folder, <tmp>/<prefix>_<pid>: made on first
+// use, and removed with everything in it when the process exits (tests
+// leave nothing behind in the system's temporary folder).
+inline std::filesystem::path ProcessTempDir(const std::string& prefix)
+{
+  struct Dirs {
+    std::mutex m;
+    std::map<std::string, std::filesystem::path> paths;
+    ~Dirs()
+    {
+      for (const auto& [name, path] : paths) {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+      }
+    }
+  };
+  static Dirs dirs;
+  std::lock_guard<std::mutex> lock(dirs.m);
+  std::filesystem::path& d = dirs.paths[prefix];
+  if (d.empty()) {
+    d = std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(d);
+  }
+  return d;
 }
 
 inline std::string SourcePath(const std::string& rel) { return std::string(CELLRAY_SOURCE_DIR) + "/" + rel; }
