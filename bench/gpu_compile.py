@@ -6,7 +6,7 @@ kernel: VGPRs and SGPRs, scratch (private memory spilled or kept in memory:
 the traversal stacks), LDS, code size, and the occupancy in waves per SIMD
 that the registers allow. docs/OPENCL.md records its output and reads it.
 
-  bench/gpu_compile.py [--mcpu gfx906] [--out DIR] [--jobs N] [--filter TEXT]
+  bench/gpu_compile.py [--mcpu gfx906] [--out DIR] [--jobs N] [--filter TEXT] [--exclude TEXT,...]
                        [--accels grid,octree,bvh,hgrid] [--precisions fast,robust,fp64]
                        [--type-sets T,ST,STC,all]
                        [--cold auto|call|inline] [--check-host BIN]
@@ -180,6 +180,8 @@ def configurations(args, types, accels):
                                                cold=args.cold)))
     if args.filter:
         cfgs = [c for c in cfgs if args.filter in c["id"]]
+    excluded = [x for x in args.exclude.split(",") if x]
+    cfgs = [c for c in cfgs if not any(x in c["id"] for x in excluded)]
     return cfgs
 
 
@@ -230,6 +232,8 @@ def main():
     ap.add_argument("--out", default="gpu-compile-out")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--filter", default="", help="only configurations whose id contains this text")
+    ap.add_argument("--exclude", default="",
+                    help="comma-separated texts: no configuration whose id contains one of them")
     ap.add_argument("--accels", default="grid,octree,bvh,hgrid")
     ap.add_argument("--precisions", default=",".join(PRECISIONS))
     ap.add_argument("--type-sets", default="T,ST,STC,all",
