@@ -89,7 +89,7 @@ inline std::uint32_t RayIndex(const KernelJob& job, std::size_t p)
 // empty run, one comparison per leaf. A moving scene, whatever its types,
 // takes kAllTypes | kMotionBit instead (SelectMotionKernel). With
 // CELLRAY_SIMD_ALL_TYPES_ONLY (CMake option CELLRAY_SIMD_TYPE_SETS=all, the
-// sanitizer preset's: a third of the ISA units' compile time) every scene
+// sanitizer preset's: 12-39% of each ISA unit's compile time) every scene
 // runs kAllTypes, whose code holds every type's test and gives the same
 // answers; the ci preset compiles and tests the one-type sets.
 template <unsigned kTypes>

@@ -414,7 +414,8 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
       // code is the same in all three; the per-ray sweeps above run each
       // precision's intersectors on every structure and variant).
       const Precision precisions[] = {Precision::Fast, Precision::Robust, Precision::Fp64};
-      for (Precision precision : {precisions[pair++ % 3]}) {
+      {
+        const Precision precision = precisions[pair++ % 3];
         const std::string tag = fmt::format("cam-{}-{}-{}", AccelKindName(accel), variant, PrecisionName(precision));
         const std::string hitsPath = (Dir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(
@@ -424,18 +425,19 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
             tag);
         ++runs;
         CheckClean(o, tag);
-        if (o.code != 0) continue;
-        TraceConfig cfg;
-        cfg.backend = Backend::OpenCL;
-        cfg.accel = accel;
-        cfg.precision = precision;
-        cfg.variant = "ray-generic";
-        std::vector<HitRecord> ref;
-        CreateTracer(scene, cfg)->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, ref, nullptr);
-        std::string first;
-        const std::size_t n = Differ(ReadHits(hitsPath), ref, false, first);
-        INFO(tag, ": ", first);
-        CHECK(n == 0);
+        if (o.code == 0) {
+          TraceConfig cfg;
+          cfg.backend = Backend::OpenCL;
+          cfg.accel = accel;
+          cfg.precision = precision;
+          cfg.variant = "ray-generic";
+          std::vector<HitRecord> ref;
+          CreateTracer(scene, cfg)->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, ref, nullptr);
+          std::string first;
+          const std::size_t n = Differ(ReadHits(hitsPath), ref, false, first);
+          INFO(tag, ": ", first);
+          CHECK(n == 0);
+        }
       }
       // The generic programs (every type and structure, chosen by arguments).
       for (bool occlusion : {false, true}) {
