@@ -221,6 +221,34 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
   }
 }
 
+TEST_CASE("render without its image module: a runtime error (exit 1) before the work, no file; trace never needs it")
+{
+  std::string scene = Write("nomodule.nff", "s 0 0 0 1\n");
+  const std::string env = "CELLRAY_IMAGE_MODULE=" + (Dir() / "no-such-module.so").string() + " ";
+  fs::path img = Dir() / "nomodule.png", err = Dir() / "nm_err.txt";
+  std::string cmd = env + CELLRAY_BINARY + std::string(" render ") + scene + " --size 8x8 --no-progress -o " +
+                    img.string() + " >/dev/null 2>" + err.string();
+  int status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 1);
+  const std::string e = Slurp(err);
+  CHECK(e.find("cellray: image support (libcellray_image.so, OpenImageIO) cannot be loaded: tried ") == 0);
+  CHECK(e.find("no-such-module.so (absent)") != std::string::npos);
+  CHECK_FALSE(fs::exists(img));
+  // An unsupported format is bad input, told before the module is looked for.
+  cmd = env + CELLRAY_BINARY + std::string(" render ") + scene + " --size 8x8 --no-progress -o " +
+        (Dir() / "x.bmp").string() + " >/dev/null 2>" + err.string();
+  status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 2);
+  CHECK(Slurp(err).find("unsupported image format (use .png or .exr)") != std::string::npos);
+  // Tracing writes no image and does not load the module.
+  cmd = env + CELLRAY_BINARY + std::string(" trace ") + scene + " --rays " + Rays() + " >/dev/null 2>" + err.string();
+  status = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+}
+
 TEST_CASE("no OpenCL platform: the default backend falls back to simd with one warning line")
 {
   std::string scene = Write("fallback.nff", "s 0 0 0 1\n");

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>
 
+#include "host/core/version.h"
 #include "simd/isa.h"
 #include "host/trace/tracer.h"
 
@@ -111,6 +112,7 @@ nlohmann::json MachineInfo(const std::string& sourceRoot)
   std::string commit = Git(sourceRoot, "rev-parse HEAD");
   if (!commit.empty() && !Git(sourceRoot, "status --porcelain --untracked-files=no").empty()) commit += "-dirty";
   j["git_commit"] = commit.empty() ? "unknown" : commit;
+  j["build_commit"] = BuildCommit();  // the binary's, which may differ from the tree's
   j["date"] = UtcNow();
   j["compiler"] = __VERSION__;
 #ifdef NDEBUG

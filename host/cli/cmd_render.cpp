@@ -248,6 +248,7 @@ Run RegisterRender(CLI::App& app)
     else throw InputError(fmt::format("--sides '{}': expected auto, one or two", o->sides));
     if (ro.spd && (ro.spp != 1 || o->fresnel)) throw InputError("--spd fixes one sample per pixel corner and no Fresnel");
     if (o->areaLights < 0.0) throw InputError(fmt::format("--area-lights {}: the radius must be > 0", o->areaLights));
+    if (mpi::Rank() == 0) CheckImageOutput(o->out);  // a format we write and a loadable image module, before the work
     const auto tLoad = std::chrono::steady_clock::now();
     Scene scene = LoadScene(o->scene);
     const double loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tLoad).count();

@@ -8,10 +8,12 @@
 #include <string>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <tbb/global_control.h>
 
 #include "host/cli/commands.h"
 #include "host/core/error.h"
+#include "host/core/version.h"
 #include "host/mpi/mpi.h"
 
 namespace {
@@ -45,7 +47,7 @@ int Main(int argc, char** argv)
       "cellray: ray tracing with " + cr::AccelKindNames() + " on CPU SIMD and OpenCL, checked against an fp64 reference";
   CLI::App app{about};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "cellray 0.1.0");
+  app.set_version_flag("--version", fmt::format("cellray {} ({})", cr::Version(), cr::BuildCommit()));
   std::map<CLI::App*, cr::cli::Run> runs;
   cr::cli::SetCommandLine(argc, argv);
   try {

@@ -7,6 +7,11 @@
 
 namespace cr {
 
+// Checks that `path` names an image format we write (.png, .exr; else
+// InputError) and that the image module loads (else RuntimeError), so that
+// a long render fails before it starts, not when it writes.
+void CheckImageOutput(const std::string& path);
+
 // `rgb` holds width * height * 3 linear floats, row-major from the top.
 void WriteImage(const std::string& path, int width, int height, const std::vector<float>& rgb);
 
