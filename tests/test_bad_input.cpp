@@ -221,7 +221,7 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
   }
 }
 
-TEST_CASE("render without its image module: a runtime error (exit 1) before the work, no file; trace never needs it")
+TEST_CASE("render without its image module: a runtime error (exit 1) before the work and no file, while trace never needs it")
 {
   std::string scene = Write("nomodule.nff", "s 0 0 0 1\n");
   const std::string env = "CELLRAY_IMAGE_MODULE=" + (Dir() / "no-such-module.so").string() + " ";

@@ -51,7 +51,6 @@ std::string Compare(int width, int height, const std::vector<float>& a, const st
 try {
   OIIO::ImageBuf A = Display(width, height, a), B = Display(width, height, b);
   auto r = OIIO::ImageBufAlgo::compare(A, B, 1.0f / 255.0f, 1.0f / 255.0f);
-  if (r.error) return "image comparison failed";
   d.psnr = r.PSNR;
   d.rmsError = r.rms_error;
   d.meanError = r.meanerror;
