@@ -51,6 +51,35 @@
  * primitive spanning cells) is kept while the walk goes on, as in the
  * uniform grid.
  *
+ * Empty space is skipped by distance (Cohen & Sheffer 1994, "Proximity
+ * clouds"; the macro-regions of Devillers 1989): after each grid's cell
+ * offsets, one byte per cell (four to a uint, the first cell in the lowest
+ * byte) holds an empty cell's distance d to the nearest cell that is not
+ * (child cells count as full), in cells, max norm, at most 255; 0 in a full
+ * cell. Every cell within d - 1 of an empty cell is empty, so where d >= 2
+ * the walk jumps to where the ray leaves that box of (2d - 1)^3 cells: the
+ * smallest of its three exit planes' parameters, T, each computed as the
+ * walk computes it (Grid_Plane, Ray_PlaneT), so the cells the DDA would
+ * visit before T are the box's, all empty. The walk goes on in the cell
+ * across that plane (on the other two axes, Grid_EnterAt's cell at T), or
+ * leaves the grid there, or ends when the closest hit so far lies at or
+ * before T, exactly as the DDA reaching T would. Where T is not past the
+ * cell's entry (a ray lying in a plane), it takes the ordinary step. A
+ * builder that skips nothing writes 0 or 1 everywhere (--hgrid-skip off).
+ *
+ * A primitive that spans cells is tested once per ray, not once per cell
+ * (mailboxing: Amanatides & Woo 1987, "A fast voxel traversal algorithm";
+ * here per ray, as Kalojanov et al. do on GPUs): a direct-mapped table of
+ * CR_HGRID_MAILBOX entries keeps the last primitive tested in each slot
+ * (index = primitive & (CR_HGRID_MAILBOX - 1)), and a reference found there
+ * is skipped. Skipping is exact: the same ray against the same primitive
+ * gives the same answer, which the hit already holds (a hit beyond the
+ * cell is kept). The SIMD walk filters each cell's references through the
+ * same table before testing them 4 at a time, so both test the same
+ * primitives and count the same nIT. On the teapot in a stadium it cuts the
+ * tests per ray from 8.4 to 5.0 (primary) and from 12.3 to 4.8 (diffuse):
+ * its ground and walls lie in many cells.
+ *
  * Counts (CR_STATS): nTS cells visited at every level, nLeaves cells that
  * hold references or none, nEmptyLeaves the empty ones, nIT primitive tests. */
 #ifndef CELLRAY_KERNELS_HGRID_H
@@ -76,6 +105,43 @@ CR_FUNC real HGrid_Reach(const Ray* ray, real t)
   return (real)CR_HGRID_RAY_ERR * d * t;
 }
 
+/* The distance byte of cell idx of a grid whose cell offsets are cellStart. */
+CR_FUNC uint HGrid_Distance(CR_GLOBAL const GridHeader* g, CR_GLOBAL const uint* cellStart, uint idx)
+{
+  return (cellStart[g->nCells + 1u + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu;
+}
+
+/* The jump from empty cell `cell`, entered at *tEnter, whose cells within
+ * d - 1 are all empty (d >= 2): 2 where the ray's box exit is not past
+ * *tEnter (take the ordinary step), else *tEnter = the exit T and 1 with
+ * `cell` moved across the exit plane, or 0 where the walk of this grid ends
+ * there (the closest hit so far at or before T, or the grid's face). */
+CR_FUNC int HGrid_Skip(CR_GLOBAL const GridHeader* g, const Ray* ray, real hitT, int d, int cell[3], real* tEnter)
+{
+  int axis = 0;
+  int last = 0;
+  real t = (real)CR_INF;
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const int res = (int)g->res[a];
+    const int up = ray->inv[a] < (real)0.0f ? 0 : 1;
+    const int b = up ? cr_min(cell[a] + d - 1, res - 1) : cr_max(cell[a] - d + 1, 0);
+    const real ta = Ray_PlaneT(ray, a, Grid_Plane(g, a, up ? b + 1 : b));
+    if (ta < t) {
+      t = ta;
+      axis = a;
+      last = b;
+    }
+  }
+  if (!(t > *tEnter)) return 2;
+  *tEnter = t;
+  if (hitT <= t) return 0;
+  const int next = last + (CR_PICK3(ray->inv, axis) < (real)0.0f ? -1 : 1);
+  if (next < 0 || next >= (int)CR_PICK3(g->res, axis)) return 0;
+  Grid_EnterAt(g, ray, t, cell);
+  CR_UNROLL for (int a = 0; a < 3; ++a) if (a == axis) cell[a] = next;
+  return 1;
+}
+
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * hierarchical grid; `hit` must come from Hit_Init. */
 CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridHeader* subs, CR_GLOBAL const uint* refs,
@@ -92,6 +158,8 @@ CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridH
   int sp = 0;
   uint gi = CR_NO_HIT;
   CR_GLOBAL const GridHeader* g = root;
+  uint mailbox[CR_HGRID_MAILBOX];
+  CR_UNROLL for (int k = 0; k < CR_HGRID_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
   for (;;) {
     /* Cell `cell` of grid g, entered at tEnter. */
     CR_COUNT(st, nTS);
@@ -115,19 +183,29 @@ CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridH
       ++begin; /* finer than the ray's precision: the cell's own references */
     }
     CR_COUNT(st, nLeaves);
-    if (begin == end) CR_COUNT(st, nEmptyLeaves);
+    int moved = 2;
+    if (begin == end) {
+      CR_COUNT(st, nEmptyLeaves);
+      const uint d = HGrid_Distance(g, cellStart, idx);
+      if (d >= (uint)CR_HGRID_SKIP_MIN) moved = HGrid_Skip(g, ray, hit->t, (int)d, cell, &tEnter);
+    }
     for (uint i = begin; i < end; ++i) {
+      const uint prim = refs[i];
+      if (mailbox[prim & (CR_HGRID_MAILBOX - 1u)] == prim) continue; /* tested already: same ray, same answer */
+      mailbox[prim & (CR_HGRID_MAILBOX - 1u)] = prim;
       CR_COUNT(st, nIT);
-      if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return;
+      if (Prim_Intersect(pv, prim, ray, hit) && anyHit) return;
     }
     /* On to the next cell: of this grid, or, where the walk leaves it, of
      * the nearest ancestor it does not leave. */
-    while (!Grid_Step(g, ray, hit->t, cell, &tEnter)) {
+    if (moved == 2) moved = Grid_Step(g, ray, hit->t, cell, &tEnter);
+    while (!moved) {
       if (hit->t <= tEnter || sp == 0) return;
       --sp;
       gi = stackGrid[sp];
       g = gi == CR_NO_HIT ? root : subs + gi;
       CR_UNROLL for (int a = 0; a < 3; ++a) cell[a] = stackCell[3 * sp + a];
+      moved = Grid_Step(g, ray, hit->t, cell, &tEnter);
     }
   }
 }

@@ -284,6 +284,12 @@ typedef struct {
 #define CR_HGRID_MAX_DEPTH 4
 #define CR_HGRID_CHILD 0x80000000u
 #define CR_HGRID_RAY_ERR 4.76837158203125e-07f
+/* Entries of the hierarchical grid walk's mailbox (a power of two;
+ * kernels/hgrid.h). */
+#define CR_HGRID_MAILBOX 8
+/* The least distance at which the walk jumps over empty cells (kernels/hgrid.h
+ * HGrid_Skip; 3 measured 1.015 of 2's SIMD time, docs/BENCHMARKS.md). */
+#define CR_HGRID_SKIP_MIN 2
 
 /* Octree node, 16 bytes. childMask != 0: interior node; its non-empty children
  * are stored in octant order starting at `first`, child of octant o at

@@ -2,10 +2,14 @@
 // are prepared and enter the root grid N at a time (RayPacket_Init,
 // GridPacket_Enter), then each walks the grids cell by cell, descending
 // into a child grid from the parameter where it entered the child's cell
-// (GridSingle_EnterAt of simd/grid_walk.h) and testing a cell's primitives
-// 4 at a time. The structure has no packet walk of its own yet: its packet
+// (GridSingle_EnterAt of simd/grid_walk.h), jumping over empty space by
+// the cells' distances (HGrid_Skip) and testing a cell's primitives not
+// in the ray's mailbox 4 at a time. The structure has no packet walk of its own yet: its packet
 // kernel is this one (kernels_hgrid.cpp).
 #pragma once
+
+#include <algorithm>
+#include <limits>
 
 #include "simd/bvh_single.h"
 #include "simd/grid_single.h"
@@ -48,6 +52,8 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
   };
   Saved stack[CR_HGRID_MAX_DEPTH];
   int sp = 0;
+  std::uint32_t mailbox[CR_HGRID_MAILBOX];
+  for (std::uint32_t& m : mailbox) m = CR_NO_HIT;
   const auto setGrid = [&](const GridHeader* ng) __attribute__((always_inline)) {
     g = ng;
     cellStart = refs + ng->first;
@@ -92,25 +98,73 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
       ++begin;  // finer than the ray's precision: the cell's own references
     }
     if constexpr (kStats) ++st.nLeaves;
+    // Set where a jump leaves this grid: the walk goes on in the parent's.
+    bool leave = false;
     if (begin == end) {
       if constexpr (kStats) ++st.nEmptyLeaves;
-    } else if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st) && anyHit) {
-      return;
+      // HGrid_Distance and HGrid_Skip of kernels/hgrid.h.
+      const int d = int((cellStart[g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
+      if (d >= CR_HGRID_SKIP_MIN) {
+        int axis = 0, last = 0;
+        float t = std::numeric_limits<float>::infinity();
+        for (int a = 0; a < 3; ++a) {
+          const int b = step[a] > 0 ? std::min(cell[a] + d - 1, res[a] - 1) : std::max(cell[a] - d + 1, 0);
+          const float ta = PlaneT(GridPlane(*g, a, step[a] > 0 ? b + 1 : b), ray.org[a], ray.inv[a]);
+          if (ta < t) {
+            t = ta;
+            axis = a;
+            last = b;
+          }
+        }
+        if (t > tEnter) {
+          tEnter = t;
+          if (hit.t <= t) return;
+          const int next = last + step[axis];
+          if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
+            int c[3];
+            GridSingle_EnterAt(*g, ray, t, c);
+            c[axis] = next;
+            enterCell(c);
+            continue;
+          }
+          leave = true;
+        }
+      }
+    } else {
+      // The references not in the mailbox (kernels/hgrid.h), in order, a
+      // chunk at a time, then tested 4 at a time: the scalar loop's tests.
+      constexpr std::uint32_t kChunk = 32;
+      alignas(16) std::uint32_t fresh[kChunk];
+      std::uint32_t i = begin;
+      while (i < end) {
+        std::uint32_t n = 0;
+        for (; i < end && n < kChunk; ++i) {
+          const std::uint32_t prim = refs[i];
+          std::uint32_t& slot = mailbox[prim & (CR_HGRID_MAILBOX - 1u)];
+          if (slot == prim) continue;
+          slot = prim;
+          fresh[n++] = prim;
+        }
+        if (n && RayRefs_Intersect<kTypes, kFast, kStats>(sc, fresh, 0, n, pr, hit, anyHit, st) && anyHit) return;
+      }
     }
     // Exit face: the smallest crossing, x before y before z on ties (the
     // scalar loop's strict <), chosen without branches.
     for (;;) {
-      const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
-      const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
-      tEnter = tNext[axis];
-      if (hit.t <= tEnter) return;
-      const int c = cell[axis] + step[axis];
-      if (static_cast<unsigned>(c) < static_cast<unsigned>(res[axis])) {
-        cell[axis] = c;
-        idx += static_cast<std::uint32_t>(dIdx[axis]);
-        tNext[axis] = PlaneT(GridPlane(*g, axis, step[axis] > 0 ? c + 1 : c), ray.org[axis], ray.inv[axis]);
-        break;
+      if (!leave) {
+        const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
+        const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
+        tEnter = tNext[axis];
+        if (hit.t <= tEnter) return;
+        const int c = cell[axis] + step[axis];
+        if (static_cast<unsigned>(c) < static_cast<unsigned>(res[axis])) {
+          cell[axis] = c;
+          idx += static_cast<std::uint32_t>(dIdx[axis]);
+          tNext[axis] = PlaneT(GridPlane(*g, axis, step[axis] > 0 ? c + 1 : c), ray.org[axis], ray.inv[axis]);
+          break;
+        }
       }
+      leave = false;
       if (sp == 0) return;
       const Saved& s = stack[--sp];
       setGrid(s.g);

@@ -56,6 +56,37 @@ int CheckLayout(const HGridData& h)
         if (i > first) CHECK(h.refs[i - 1] < h.refs[i]);
       }
     }
+    // The distance bytes after the offsets (HGrid_Distance): 0 in a full
+    // cell, elsewhere 1 + the least of its 26 neighbours' (at most 255),
+    // which only the distance to the nearest full cell satisfies; or all 0
+    // (--hgrid-skip off).
+    const auto distance = [&](std::uint32_t c) {
+      return (h.refs[g.first + g.nCells + 1 + c / 4] >> (8 * (c % 4))) & 0xffu;
+    };
+    REQUIRE(std::size_t(g.first) + g.nCells + 1 + (g.nCells + 3) / 4 <= nRefs);
+    bool allZero = true;
+    for (std::uint32_t c = 0; c < g.nCells && allZero; ++c) allZero = distance(c) == 0;
+    if (!allZero) {
+      const int r[3] = {int(g.res[0]), int(g.res[1]), int(g.res[2])};
+      for (std::uint32_t c = 0; c < g.nCells; ++c) {
+        const bool full = h.refs[g.first + c] != h.refs[g.first + c + 1];
+        if (full) {
+          CHECK(distance(c) == 0u);
+          continue;
+        }
+        const int x = int(c % g.res[0]), y = int((c / g.res[0]) % g.res[1]), z = int(c / (g.res[0] * g.res[1]));
+        std::uint32_t least = 255;
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int nx = x + dx, ny = y + dy, nz = z + dz;
+              if ((dx | dy | dz) == 0 || nx < 0 || ny < 0 || nz < 0 || nx >= r[0] || ny >= r[1] || nz >= r[2])
+                continue;
+              least = std::min(least, distance(std::uint32_t(nx + r[0] * (ny + r[1] * nz))));
+            }
+        CHECK(distance(c) == std::min(255u, least + 1));
+      }
+    }
     return deepest;
   };
   const int levels = 1 + walk(h.header, 0);
@@ -113,6 +144,43 @@ TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0
   MESSAGE("tests per ray: grid ", grid, ", hgrid ", hgrid, " (", levels, " levels)");
   CHECK(hgrid * 5.0 < grid);
   CheckAgainstGrid(scene, rays);
+}
+
+TEST_CASE("hgrid: skipping empty space by distance gives the walk's answers, bit for bit, in fewer steps")
+{
+  const Scene scene = GenerateStadium(3);
+  AccelParams off;
+  off.hgridSkip = "off";
+  AccelInfo info;
+  CheckLayout(BuildHGrid(scene, off, info));
+  CHECK(info.params.find("skip=off") != std::string::npos);
+  for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
+    const auto rays = test::MakeRays(scene, kind, 64);
+    for (Backend backend : {Backend::Scalar, Backend::Simd})
+      for (bool occlusion : {false, true}) {
+        CAPTURE(BackendName(backend));
+        CAPTURE(occlusion);
+        std::vector<HitRecord> hits[2];
+        TraceStatsSum st[2];
+        for (int skip = 0; skip < 2; ++skip) {
+          TraceConfig cfg;
+          cfg.backend = backend;
+          cfg.accel = AccelKind::HGrid;
+          cfg.params.hgridSkip = skip ? "on" : "off";
+          cfg.stats = true;
+          CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits[skip], occlusion, &st[skip]);
+          CHECK(ref::CheckHits(test::CachedReference(scene), rays, hits[skip], occlusion, Tracer::NoTimes()).wrong == 0);
+        }
+        CHECK(test::CountDiffering(hits[0], hits[1], occlusion) == 0);
+        CHECK(st[0].nIT == st[1].nIT);
+        MESSAGE("cells visited per ray, skip off ", double(st[0].nTS) / double(rays.size()), ", on ",
+                double(st[1].nTS) / double(rays.size()));
+        CHECK(double(st[1].nTS) < 0.8 * double(st[0].nTS));
+      }
+  }
+  AccelParams bad;
+  bad.hgridSkip = "maybe";
+  CHECK_THROWS_AS(BuildHGrid(scene, bad, info), InputError);
 }
 
 TEST_CASE("hgrid: rays from across the stadium test a crowded cell's own references, 0 wrong")

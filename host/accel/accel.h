@@ -50,7 +50,10 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
     "the backend's choice, 4 for simd on a scene of triangles only, else 1)")                    \
   X(hgridTopDensity, double, "--hgrid-top-density", "Hierarchical grid: root cells per primitive")       \
   X(hgridDensity, double, "--hgrid-density", "Hierarchical grid: child cells per reference of a crowded cell") \
-  X(hgridLeaf, int, "--hgrid-leaf", "Hierarchical grid: most references a cell holds without a child grid")
+  X(hgridLeaf, int, "--hgrid-leaf", "Hierarchical grid: most references a cell holds without a child grid") \
+  X(hgridSkip, std::string, "--hgrid-skip",                                                      \
+    "Hierarchical grid: skip empty space by each empty cell's distance to the nearest full one: on (the " \
+    "default) or off (the walk steps through every cell)")
 struct AccelParams {
 #define CR_ACCEL_PARAM_FIELD(f, T, opt, help) T f{};
   CR_ACCEL_PARAMS(CR_ACCEL_PARAM_FIELD)

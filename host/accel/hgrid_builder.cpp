@@ -16,7 +16,9 @@
 // the cell size in a child (kMarginPerCell; why a child's margin may be
 // smaller than the root's: kernels/hgrid.h). Cells are filled in ascending
 // reference order, so their references come sorted. The root's cells are
-// refined in parallel.
+// refined in parallel. Each grid's empty cells get their distance to the
+// nearest full one, by which the walk skips empty space (WriteDistances;
+// --hgrid-skip off writes zeros).
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -188,6 +190,46 @@ void Refine(const Context& cx, GridBuild& grid, std::uint32_t c, int depth)
   if (child) grid.SetChild(c, std::move(child));
 }
 
+// The distance bytes of kernels/hgrid.h (HGrid_Distance): for each empty
+// cell the distance, in cells and max norm, to the nearest cell with
+// references or a child, at most 255 (0 for those), packed four to a word
+// after the grid's cell offsets. Two raster passes over the 26 neighbours
+// (a chamfer transform with unit weights, exact for the max norm).
+void WriteDistances(const GridBuild& g, std::uint32_t* words)
+{
+  const int rx = int(g.h.res[0]), ry = int(g.h.res[1]), rz = int(g.h.res[2]);
+  const std::uint32_t n = g.h.nCells;
+  std::vector<std::uint8_t> d(n);
+  for (std::uint32_t c = 0; c < n; ++c) d[c] = g.start[c + 1] != g.start[c] || g.ChildOf(c) ? 0 : 255;
+  const auto pass = [&](int dir) {
+    const int z0 = dir > 0 ? 0 : rz - 1, y0 = dir > 0 ? 0 : ry - 1, x0 = dir > 0 ? 0 : rx - 1;
+    for (int z = z0; z >= 0 && z < rz; z += dir)
+      for (int y = y0; y >= 0 && y < ry; y += dir)
+        for (int x = x0; x >= 0 && x < rx; x += dir) {
+          std::uint8_t& v = d[std::size_t(x) + std::size_t(rx) * (std::size_t(y) + std::size_t(ry) * z)];
+          if (v == 0) continue;
+          // The 13 neighbours the pass has already visited: those before
+          // this cell in its order (dz, dy, dx lexicographically).
+          for (int dz = -1; dz <= 0; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+              for (int dx = -1; dx <= 1; ++dx) {
+                if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0))) continue;
+                const int nx = x + dir * dx, ny = y + dir * dy, nz = z + dir * dz;
+                if (nx < 0 || ny < 0 || nz < 0 || nx >= rx || ny >= ry || nz >= rz) continue;
+                const std::uint8_t w = d[std::size_t(nx) + std::size_t(rx) * (std::size_t(ny) + std::size_t(ry) * nz)];
+                if (w + 1 < v) v = std::uint8_t(w + 1);
+              }
+        }
+  };
+  pass(1);
+  pass(-1);
+  for (std::uint32_t c = 0; c < n; c += 4) {
+    std::uint32_t w = 0;
+    for (std::uint32_t k = 0; k < 4 && c + k < n; ++k) w |= std::uint32_t(d[c + k]) << (8 * k);
+    words[c / 4] = w;
+  }
+}
+
 // Every grid, depth first, the root at 0 (GridBuild::node).
 void Collect(GridBuild& g, std::vector<GridBuild*>& all)
 {
@@ -204,6 +246,9 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
   const double subDensity = Density(params.hgridDensity, kDefaultSubDensity, kMaxSubDensity, "--hgrid-density");
   if (params.hgridLeaf < 0) throw InputError(fmt::format("--hgrid-leaf {} is negative", params.hgridLeaf));
   const std::uint32_t leafRefs = std::uint32_t(params.hgridLeaf == 0 ? kDefaultLeafRefs : params.hgridLeaf);
+  if (!params.hgridSkip.empty() && params.hgridSkip != "on" && params.hgridSkip != "off")
+    throw InputError(fmt::format("--hgrid-skip {}: use on or off", params.hgridSkip));
+  const bool skip = params.hgridSkip != "off";
 
   AccelParams topParams;
   topParams.gridDensity = topDensity;
@@ -253,7 +298,7 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
     const GridBuild& g = *all[i];
     offsetAt[i] = nOffsets;
     itemAt[i] = nItems;  // after the offsets: shifted below
-    nOffsets += g.start.size();
+    nOffsets += g.start.size() + (g.h.nCells + 3) / 4;  // the offsets, then the distance bytes
     nCells += g.h.nCells;
     for (std::uint32_t c = 0; c < g.h.nCells; ++c) {
       const std::uint32_t k = g.start[c + 1] - g.start[c];
@@ -288,6 +333,10 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
       for (std::uint32_t k = g.start[c]; k < g.start[c + 1]; ++k) out.refs[at++] = g.items[k];
     }
     offsets[g.h.nCells] = std::uint32_t(at);
+    if (skip)
+      WriteDistances(g, offsets + g.h.nCells + 1);
+    else
+      std::fill_n(offsets + g.h.nCells + 1, (g.h.nCells + 3) / 4, 0u);
     if (i == 0)
       out.header = g.h;
     else
@@ -306,8 +355,9 @@ HGridData BuildHGrid(const Scene& scene, const AccelParams& params, AccelInfo& i
   info.emptyLeaves = emptyCells;
   info.refs = nRefs;
   info.bytes = sizeof(GridHeader) * (1 + out.subs.size()) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("top={} sub={} leaf={} res={}x{}x{} grids={} levels={}", topDensity, subDensity, leafRefs,
-                            out.header.res[0], out.header.res[1], out.header.res[2], all.size(), levels);
+  info.params = fmt::format("top={} sub={} leaf={} skip={} res={}x{}x{} grids={} levels={}", topDensity, subDensity,
+                            leafRefs, skip ? "on" : "off", out.header.res[0], out.header.res[1], out.header.res[2],
+                            all.size(), levels);
   return out;
 }
 
