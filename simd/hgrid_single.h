@@ -3,9 +3,9 @@
 // GridPacket_Enter), then each walks the grids cell by cell, descending
 // into a child grid from the parameter where it entered the child's cell
 // (GridSingle_EnterAt of simd/grid_walk.h), jumping over empty space by
-// the cells' distances (HGrid_Skip) and testing a cell's primitives not
-// in the ray's mailbox 4 at a time. The structure has no packet walk of its own yet: its packet
-// kernel is this one (kernels_hgrid.cpp).
+// the cells' distances (HGrid_Skip) and testing a cell's primitives not in
+// the ray's mailbox 4 at a time. The structure has no packet walk of its
+// own yet: its packet kernel is this one (kernels_hgrid.cpp).
 #pragma once
 
 #include <algorithm>

@@ -249,6 +249,27 @@ TEST_CASE("render without its image module: a runtime error (exit 1) before the 
   CHECK(WEXITSTATUS(status) == 0);
 }
 
+TEST_CASE("generated scenes (gen:KIND:N) load in rays and trace as in bench, and bad names are exit 2")
+{
+  const std::string rays = (Dir() / "gen.rays").string();
+  Result r = Run("rays gen:sphereflake:1 --size 16x16 -o " + rays);
+  REQUIRE(r.code == 0);
+  const std::string hits = (Dir() / "gen.hits").string();
+  r = Run("trace gen:sphereflake:1 --rays " + rays + " --backend simd -o " + hits);
+  CHECK(r.code == 0);
+  CHECK(r.out.find("\"scene\":\"gen:sphereflake:1\"") != std::string::npos);
+  CHECK(r.out.find("\"hits\":0,") == std::string::npos);  // the flake is in view
+  r = Run("check gen:sphereflake:1 --rays " + rays + " --hits " + hits);
+  CHECK(r.code == 0);
+  CHECK(r.out.find("\"wrong\":0,") != std::string::npos);
+  for (const char* bad : {"gen:teapots:3", "gen:stadium:x", "gen:stadium"}) {
+    r = Run(std::string("trace ") + bad + " --rays " + rays);
+    INFO(bad, ": ", r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(std::string("cellray: scene '") + bad + "': ") == 0);
+  }
+}
+
 TEST_CASE("no OpenCL platform: the default backend falls back to simd with one warning line")
 {
   std::string scene = Write("fallback.nff", "s 0 0 0 1\n");

@@ -8,59 +8,21 @@
 #include <fmt/format.h>
 
 #include "host/core/error.h"
-#include "host/scene/generate.h"
+#include "host/scene/generated.h"
 
 namespace cr::bench {
-
-namespace {
-// The kinds LoadBenchScene generates (gen:KIND:N).
-const std::string_view kGenKinds[] = {"sphereflake", "bumpy", "stadium", "quadrics", "polyhedra", "sdf", "csg"};
-// gen:subdiv-MESH:N, a real mesh subdivided to N triangles (SubdivideMesh).
-const std::string kSubdiv = "subdiv-";
-}  // namespace
-
-std::string GeneratedKinds()
-{
-  std::string s;
-  for (std::string_view k : kGenKinds) {
-    if (!s.empty()) s += '|';
-    s += k;
-  }
-  return s + '|' + kSubdiv + "MESH";
-}
 
 namespace fs = std::filesystem;
 
 namespace {
 
-bool IsSourceRoot(const fs::path& p)
-{
-  std::error_code ec;
-  return fs::is_directory(p / "scenes" / "spd", ec) && fs::is_regular_file(p / "bench" / "plot.py", ec);
-}
-
 std::string MeshDir(const std::string& root) { return root.empty() ? "" : (fs::path(root) / ".." / "shared" / "scenes" / "meshes").lexically_normal().string(); }
 
-// Parses gen:KIND:N.
+// gen:KIND:N, checked (host/scene/generated.h).
 std::optional<SceneRef> GeneratedRef(const std::string& name)
 {
-  if (name.rfind("gen:", 0) != 0) return std::nullopt;
-  const auto colon = name.find(':', 4);
-  if (colon == std::string::npos) throw InputError(fmt::format("scene '{}': expected gen:KIND:N", name));
-  const std::string kind = name.substr(4, colon - 4);
-  const std::string num = name.substr(colon + 1);
-  std::uint64_t n = 0;
-  auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), n);
-  if (ec != std::errc() || p != num.data() + num.size())
-    throw InputError(fmt::format("scene '{}': '{}' is not a number", name, num));
-  if (kind.rfind(kSubdiv, 0) == 0) {
-    if (MeshPath(kind.substr(kSubdiv.size())).empty())
-      throw InputError(fmt::format("scene '{}': no mesh ../shared/scenes/meshes/{}.obj beside the source tree", name,
-                                   kind.substr(kSubdiv.size())));
-  } else if (std::find(std::begin(kGenKinds), std::end(kGenKinds), kind) == std::end(kGenKinds)) {
-    throw InputError(fmt::format("scene '{}': generated kinds are {}", name, GeneratedKinds()));
-  }
-  return SceneRef{fmt::format("{}-{}", kind, n), name, name, true};
+  if (!IsGeneratedName(name)) return std::nullopt;
+  return SceneRef{GeneratedShortName(name), name, name, true};
 }
 
 // A path relative to the source tree (scenes/spd/x.nff,
@@ -78,31 +40,6 @@ std::string Shown(const std::string& path, const std::string& root)
 }
 
 }  // namespace
-
-std::string MeshPath(const std::string& name)
-{
-  const std::string dir = MeshDir(FindSourceRoot());
-  std::error_code ec;
-  if (dir.empty() || name.empty() || name.find('/') != std::string::npos) return "";
-  const fs::path p = fs::path(dir) / (name + ".obj");
-  return fs::is_regular_file(p, ec) ? p.string() : "";
-}
-
-std::string FindSourceRoot()
-{
-  std::error_code ec;
-  std::vector<fs::path> starts = {fs::current_path(ec)};
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) starts.push_back(exe.parent_path());
-  for (fs::path p : starts) {
-    for (int up = 0; up < 6 && !p.empty(); ++up) {
-      if (IsSourceRoot(p)) return fs::weakly_canonical(p, ec).string();
-      if (p == p.parent_path()) break;
-      p = p.parent_path();
-    }
-  }
-  return "";
-}
 
 const std::vector<std::string>& DefaultSpdScenes()
 {
@@ -161,24 +98,6 @@ std::vector<SceneRef> ResolveScenes(const std::vector<std::string>& names, std::
   return out;
 }
 
-Scene LoadBenchScene(const SceneRef& ref)
-{
-  if (!ref.generated) return LoadScene(ref.path);
-  const auto colon = ref.path.find(':', 4);
-  const std::string kind = ref.path.substr(4, colon - 4);
-  const std::uint64_t n = std::stoull(ref.path.substr(colon + 1));
-  if (kind.rfind(kSubdiv, 0) == 0) {
-    const std::string mesh = MeshPath(kind.substr(kSubdiv.size()));
-    if (mesh.empty()) throw InputError(fmt::format("scene '{}': mesh not found", ref.path));
-    return SubdivideMesh(LoadScene(mesh), n);
-  }
-  if (kind == "sphereflake") return GenerateSphereflake(static_cast<int>(std::min<std::uint64_t>(n, 100)));
-  if (kind == "bumpy") return GenerateBumpySphere(n);
-  if (kind == "quadrics") return GenerateQuadricField(n);
-  if (kind == "polyhedra") return GeneratePolyhedronField(n);
-  if (kind == "sdf") return GenerateSdfField(n);
-  if (kind == "csg") return GenerateCsgField(n);
-  return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
-}
+Scene LoadBenchScene(const SceneRef& ref) { return ref.generated ? LoadGenerated(ref.path) : LoadScene(ref.path); }
 
 }  // namespace cr::bench

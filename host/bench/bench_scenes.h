@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "host/scene/generated.h"
 #include "host/scene/scene.h"
 
 namespace cr::bench {
@@ -19,16 +20,11 @@ struct SceneRef {
   bool generated = false;
 };
 
-// The source tree (the directory holding scenes/spd and bench/), searched
-// from the working directory and from the executable's location; empty when
-// neither leads to it.
-std::string FindSourceRoot();
-
-// ../shared/scenes/meshes/NAME.obj beside the source tree, or "" when absent.
-std::string MeshPath(const std::string& name);
-
-// The generated scene kinds (gen:KIND:N), as "a|b|c" for help and messages.
-std::string GeneratedKinds();
+// FindSourceRoot, MeshPath and GeneratedKinds live with the generated
+// scenes (host/scene/generated.h), which every command loads.
+using ::cr::FindSourceRoot;
+using ::cr::GeneratedKinds;
+using ::cr::MeshPath;
 
 // The 7 SPD scenes of the benchmark issue, in order.
 const std::vector<std::string>& DefaultSpdScenes();

@@ -171,7 +171,7 @@ Run RegisterRender(CLI::App& app)
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand(
       "render", "Render a scene to PNG or EXR (Whitted with distributed effects, or a path tracer; docs/RENDERING.md)");
-  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj), or gen:KIND:N (a generated scene, as in cellray bench)")->required();
   cmd->add_option("-o,--output", o->out, "Output image (.png: 8-bit sRGB, .exr: float linear)")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WxH (default: the scene's resolution)");
   cmd->add_option("--integrator", o->integrator, "whitted (point and area lights, mirrors, glass, --diffuse) or path")

@@ -48,7 +48,7 @@ Run RegisterRays(CLI::App& app)
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("rays", "Generate a ray set (.rays) for a scene");
-  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj), or gen:KIND:N (a generated scene, as in cellray bench)")->required();
   cmd->add_option("--kind", o->kind, "primary, shadow, diffuse or random")->capture_default_str();
   cmd->add_option("--size", o->size, "Image size WxH for primary samples (default: the scene's resolution)");
   cmd->add_flag("--spd-corners", o->spd, "Primary rays through the (W+1)x(H+1) pixel corners (SPD procedure)");
@@ -87,7 +87,7 @@ Run RegisterTrace(CLI::App& app)
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("trace", "Trace a ray set; print one JSON line; optionally write .hits");
-  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj), or gen:KIND:N (a generated scene, as in cellray bench)")->required();
   auto* raysOpt = cmd->add_option("--rays", o->rays, "Input .rays file");
   cmd->add_option("--primary", o->primary,
                   "Trace the camera's primary rays of a WxH image instead of a .rays file (generated on the device "
@@ -230,7 +230,7 @@ Run RegisterCheck(CLI::App& app)
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("check", "Compare a .hits file with the fp64 reference; print JSON");
-  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj)")->required();
+  cmd->add_option("scene", o->scene, "Scene file (.nff or .obj), or gen:KIND:N (a generated scene, as in cellray bench)")->required();
   cmd->add_option("--rays", o->rays, "The .rays file that was traced")->required();
   cmd->add_option("--hits", o->hits, "The .hits file to check")->required();
   cmd->add_flag("--occlusion", o->occlusion, "The hits answer the any-hit (shadow) query");

@@ -7,6 +7,7 @@
 
 #include "host/core/error.h"
 #include "host/prims/prim_host.h"
+#include "host/scene/generated.h"
 #include "host/scene/triangulate.h"
 
 namespace cr {
@@ -190,7 +191,8 @@ Scene LoadScene(const std::string& path)
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".nff") return LoadNFF(path);
   if (ext == ".obj") return LoadOBJ(path);
-  throw InputError(path, 0, fmt::format("unknown scene format '{}' (expected .nff or .obj)", ext));
+  if (IsGeneratedName(path)) return LoadGenerated(path);
+  throw InputError(path, 0, fmt::format("unknown scene format '{}' (expected .nff, .obj or gen:{}:N)", ext, GeneratedKinds()));
 }
 
 }  // namespace cr
