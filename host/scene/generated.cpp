@@ -75,9 +75,9 @@ std::string GeneratedShortName(const std::string& name)
   return fmt::format("{}-{}", p.kind, p.n);
 }
 
-Scene LoadGenerated(const std::string& name)
+namespace {
+Scene Generate(const GeneratedName& p)
 {
-  const GeneratedName p = ParseGenerated(name);
   const std::uint64_t n = p.n;
   if (p.kind.rfind(kSubdiv, 0) == 0) return SubdivideMesh(LoadScene(MeshPath(p.kind.substr(kSubdiv.size()))), n);
   if (p.kind == "sphereflake") return GenerateSphereflake(static_cast<int>(std::min<std::uint64_t>(n, 100)));
@@ -87,6 +87,14 @@ Scene LoadGenerated(const std::string& name)
   if (p.kind == "sdf") return GenerateSdfField(n);
   if (p.kind == "csg") return GenerateCsgField(n);
   return GenerateStadium(static_cast<int>(std::min<std::uint64_t>(n, 100)));
+}
+}  // namespace
+
+Scene LoadGenerated(const std::string& name)
+{
+  Scene scene = Generate(ParseGenerated(name));
+  scene.path = name;  // what the scene is called in messages and reprs
+  return scene;
 }
 
 std::string FindSourceRoot()
