@@ -249,17 +249,20 @@ Outcome RunUnderOclgrind(const std::string& args, const std::string& tag, bool o
 }
 
 // PoCL's answers: its generic per-ray program (one per precision), the
-// structure built as cellray trace builds it.
-std::vector<HitRecord> PoclHits(const Fixture& f, AccelKind accel, Precision precision, bool occlusion)
+// structure built as cellray trace builds it: the configuration and the hits.
+TraceConfig PoclConfig(AccelKind accel, Precision precision)
 {
-  const Scene& scene = test::CachedScene(f.scene);
   TraceConfig cfg;
   cfg.backend = Backend::OpenCL;
   cfg.accel = accel;
   cfg.precision = precision;
   cfg.variant = "ray-generic";
+  return cfg;
+}
+std::vector<HitRecord> PoclHits(const Fixture& f, AccelKind accel, Precision precision, bool occlusion)
+{
   std::vector<HitRecord> hits;
-  CreateTracer(scene, cfg)->Trace(f.records, hits, occlusion, nullptr);
+  CreateTracer(test::CachedScene(f.scene), PoclConfig(accel, precision))->Trace(f.records, hits, occlusion, nullptr);
   return hits;
 }
 
@@ -426,13 +429,8 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
         ++runs;
         CheckClean(o, tag);
         if (o.code == 0) {
-          TraceConfig cfg;
-          cfg.backend = Backend::OpenCL;
-          cfg.accel = accel;
-          cfg.precision = precision;
-          cfg.variant = "ray-generic";
           std::vector<HitRecord> ref;
-          CreateTracer(scene, cfg)->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, ref, nullptr);
+          CreateTracer(scene, PoclConfig(accel, precision))->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, ref, nullptr);
           std::string first;
           const std::size_t n = Differ(ReadHits(hitsPath), ref, false, first);
           INFO(tag, ": ", first);

@@ -16,8 +16,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string MeshDir(const std::string& root) { return root.empty() ? "" : (fs::path(root) / ".." / "shared" / "scenes" / "meshes").lexically_normal().string(); }
-
 // gen:KIND:N, checked (host/scene/generated.h).
 std::optional<SceneRef> GeneratedRef(const std::string& name)
 {

@@ -20,10 +20,11 @@ struct SceneRef {
   bool generated = false;
 };
 
-// FindSourceRoot, MeshPath and GeneratedKinds live with the generated
-// scenes (host/scene/generated.h), which every command loads.
+// FindSourceRoot, MeshDir, MeshPath and GeneratedKinds live with the
+// generated scenes (host/scene/generated.h), which every command loads.
 using ::cr::FindSourceRoot;
 using ::cr::GeneratedKinds;
+using ::cr::MeshDir;
 using ::cr::MeshPath;
 
 // The 7 SPD scenes of the benchmark issue, in order.

@@ -89,22 +89,30 @@ std::string LowerExtension(const std::string& path)
 
 }  // namespace
 
-void CheckImageOutput(const std::string& path)
+namespace {
+// "png" or "exr", by the extension of an output path; InputError otherwise.
+std::string OutputFormat(const std::string& path)
 {
   const std::string ext = LowerExtension(path);
   if (ext != ".exr" && ext != ".png") throw InputError(fmt::format("{}: unsupported image format (use .png or .exr)", path));
+  return ext.substr(1);
+}
+}  // namespace
+
+void CheckImageOutput(const std::string& path)
+{
+  OutputFormat(path);
   Module();
 }
 
 void WriteImage(const std::string& path, int width, int height, const std::vector<float>& rgb)
 {
-  CheckImageOutput(path);
+  const std::string format = OutputFormat(path);
   if (rgb.size() != std::size_t(width) * height * 3) throw RuntimeError(fmt::format("{}: image size mismatch", path));
-  const std::string ext = LowerExtension(path);
   const ImageModule& m = Module();
   WriteAtomically(path, [&](const std::string& tmp) {
     // The temporary name keeps the extension: OpenImageIO picks the format by it.
-    if (std::string err = m.write(tmp, ext.substr(1), width, height, rgb); !err.empty())
+    if (std::string err = m.write(tmp, format, width, height, rgb); !err.empty())
       throw RuntimeError(fmt::format("{}: {}", path, err));
   });
 }

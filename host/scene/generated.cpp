@@ -113,12 +113,17 @@ std::string FindSourceRoot()
   return "";
 }
 
+std::string MeshDir(const std::string& root)
+{
+  return root.empty() ? "" : (fs::path(root) / ".." / "shared" / "scenes" / "meshes").lexically_normal().string();
+}
+
 std::string MeshPath(const std::string& name)
 {
-  const std::string root = FindSourceRoot();
+  const std::string dir = MeshDir(FindSourceRoot());
   std::error_code ec;
-  if (root.empty() || name.empty() || name.find('/') != std::string::npos) return "";
-  const fs::path p = (fs::path(root) / ".." / "shared" / "scenes" / "meshes").lexically_normal() / (name + ".obj");
+  if (dir.empty() || name.empty() || name.find('/') != std::string::npos) return "";
+  const fs::path p = fs::path(dir) / (name + ".obj");
   return fs::is_regular_file(p, ec) ? p.string() : "";
 }
 

@@ -29,6 +29,9 @@ Scene LoadGenerated(const std::string& name);
 // neither leads to it.
 std::string FindSourceRoot();
 
+// ../shared/scenes/meshes beside the source tree `root` ("" for no root).
+std::string MeshDir(const std::string& root);
+
 // ../shared/scenes/meshes/NAME.obj beside the source tree, or "" when absent.
 std::string MeshPath(const std::string& name);
 
