@@ -15,22 +15,25 @@
 namespace cr::simd::CR_SIMD_NS {
 
 // Positions [job.begin, job.end) of a grid-walking structure whose root is
-// grid g, one ray at a time: rays prepared and entered N at a time, then
-// walk(ray, hit, first, tEnter) for each ray that enters, from its first
-// cell and entry parameter; the answers to job.hits. Serves the uniform grid
-// and the hierarchical grid (simd/hgrid_single.h). kMotion (a moving scene):
-// each ray also takes its time (Ray::time).
-template <int N, bool kFast, bool kMotion, class Walk>
-CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
+// grid g, N rays at a time: rays prepared and entered N at a time, then
+// walk(P, rays, hits, in, cells, tEnter) with the packet, its rays and hits
+// lane by lane (hits from Hit_Init), the lanes that enter the grid (bits of
+// `in`), their first cells and entry parameters; the answers to job.hits.
+// kTiles: packets as Packet_Rays forms them (image tiles where the job has
+// them), else in job order. kMotion (a moving scene): each ray also takes
+// its time (Ray::time; the packet's, RayPacketOf).
+template <int N, bool kFast, bool kMotion, bool kTiles, class Walk>
+CR_SIMD_INLINE void GridEntry_Packets(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
 {
   const PrimView pv = MakePrimView(sc);
   for (std::size_t p = job.begin; p < job.end; p += N) {
     const RayRecord* recs[N];
     std::uint32_t idx[N];
-    const int count = Job_Rays<N>(job, p, recs, idx);
-    RayPacket<N> P;
+    const int count = kTiles ? Packet_Rays<N>(job, p, recs, idx) : Job_Rays<N>(job, p, recs, idx);
+    RayPacketOf<N, kMotion> P;
     HitPacket<N> H;
     RayPacket_Init<N>(P, H, recs);
+    if constexpr (kMotion) P.time = Job_Times<N>(job, idx, count);
     vint<N> cellV[3] = {vint<N>(0), vint<N>(0), vint<N>(0)};
     vfloat<N> tEnterV(0.0f);
     unsigned in = 0;
@@ -41,19 +44,34 @@ CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, 
     for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
     tEnterV.Store(tEnter);
     Ray rays[N];
+    Hit hits[N];
     RayPacket_Extract<N>(P, H, rays);
-    for (int l = 0; l < count; ++l) {
-      if constexpr (kMotion) rays[l].time = Job_Time(job, idx[l]);
-      const Ray& ray = rays[l];
-      Hit hit;
-      Hit_Init(&hit, &ray);
-      if ((in >> l) & 1u) {
-        const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-        walk(ray, hit, first, tEnter[l]);
-      }
-      job.hits[idx[l]] = Hit_ToRecord(&hit, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    for (int l = 0; l < N; ++l) {
+      if constexpr (kMotion) rays[l].time = Job_Time(job, idx[l < count ? l : 0]);
+      Hit_Init(&hits[l], &rays[l]);
     }
+    walk(P, rays, hits, in, cells, tEnter);
+    for (int l = 0; l < count; ++l)
+      job.hits[idx[l]] = Hit_ToRecord(&hits[l], &pv, sc.primIds, job.occlusion, sc.unifiedHits);
   }
+}
+
+// The same, one ray at a time: walk(ray, hit, first, tEnter) for each ray
+// that enters, from its first cell and entry parameter. Serves the uniform
+// grid and the hierarchical grid (simd/hgrid_single.h).
+template <int N, bool kFast, bool kMotion, class Walk>
+CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
+{
+  GridEntry_Packets<N, kFast, kMotion, false>(
+      sc, g, job,
+      [&](const RayPacket<N>&, const Ray* rays, Hit* hits, unsigned in, const std::uint32_t (&cells)[3][N],
+          const float* tEnter) {
+        for (unsigned rest = in; rest; rest &= rest - 1u) {
+          const int l = LowestBit(rest);
+          const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
+          walk(rays[l], hits[l], first, tEnter[l]);
+        }
+      });
 }
 
 // Traces positions [job.begin, job.end) one ray at a time.

@@ -22,6 +22,49 @@ CR_SIMD_INLINE vfloat<N> GridPlaneN(const GridHeader& g, int axis, vint<N> i)
   return vfloat<N>(g.bmin[axis]) + ToFloat(i) * vfloat<N>(g.cellSize[axis]);
 }
 
+// Grid_EnterAt on axis a for the lanes of `in` at once, each lane in a grid
+// of its own (planes bmin + i * cs, res cells; GridPlane's operations): the
+// cell each lane is in at its tEnter, corrected to the walk's plane
+// parameters; org, dir, inv, invNeg the lanes' ray on that axis.
+template <int N>
+CR_SIMD_INLINE vint<N> GridPacket_CellAt(vfloat<N> bmin, vfloat<N> cs, vint<N> resV, vfloat<N> org, vfloat<N> dir,
+                                         vfloat<N> inv, vbool<N> invNeg, vfloat<N> tEnter, vbool<N> in)
+{
+  const vint<N> one(1), zero(0);
+  const vint<N> top = resV - one;
+  const vfloat<N> p = org + tEnter * dir;
+  vfloat<N> rel = (p - (bmin + ToFloat(zero) * cs)) / cs;
+  rel = FMin(FMax(rel, vfloat<N>(0.0f)), ToFloat(top));
+  vint<N> c = FloorToInt(rel);
+  auto planeT = [&](vint<N> i) { return PlaneTN<N>(bmin + ToFloat(i) * cs, org, inv); };
+  const vbool<N> up = AndNot(in, invNeg), down = in & invNeg;
+  // Each loop is a scalar `while` run on its lanes at once: a lane leaves
+  // it at its first failed test. Lanes stepping up run
+  //   while (c > 0 && T(c) > tEnter) --c;  while (c < res - 1 && T(c + 1) < tEnter) ++c;
+  // lanes stepping down
+  //   while (c < res - 1 && T(c + 1) > tEnter) ++c;  while (c > 0 && T(c) < tEnter) --c;
+  // (the second loop below serves the second of the first and the first of the second).
+  vbool<N> m = up & (c > zero);
+  while (Any(m = m & (planeT(c) > tEnter))) {
+    c = c - Select(m, one, zero);
+    m = m & (c > zero);
+  }
+  m = (up | down) & (c < top);
+  for (;;) {
+    const vfloat<N> tn = planeT(c + one);
+    m = m & ((down & (tn > tEnter)) | AndNot(tn < tEnter, down));
+    if (None(m)) break;
+    c = c + Select(m, one, zero);
+    m = m & (c < top);
+  }
+  m = down & (c > zero);
+  while (Any(m = m & (planeT(c) < tEnter))) {
+    c = c - Select(m, one, zero);
+    m = m & (c > zero);
+  }
+  return c;
+}
+
 // The lanes of `active` that enter the grid, and each one's first cell
 // (kernels/grid.h Grid_Trace before its loop).
 template <int N, bool kFast>
@@ -33,42 +76,9 @@ CR_SIMD_INLINE vbool<N> GridPacket_Enter(const GridHeader& g, const RayPacket<N>
       active & Box_IntersectRays<kFast, N>(g.bmin, g.bmax, P.org, P.inv, P.invNeg, P.tmin, H.t, tEnter);
   if (tEnterOut) *tEnterOut = tEnter;
   if (None(in)) return in;
-  const vint<N> one(1), zero(0);
-  for (int a = 0; a < 3; ++a) {
-    const int res = static_cast<int>(g.res[a]);
-    const vfloat<N> p = P.org[a] + tEnter * P.dir[a];
-    vfloat<N> rel = (p - vfloat<N>(GridPlane(g, a, 0))) / vfloat<N>(g.cellSize[a]);
-    rel = FMin(FMax(rel, vfloat<N>(0.0f)), vfloat<N>(static_cast<float>(res - 1)));
-    vint<N> c = FloorToInt(rel);
-    const vint<N> top(res - 1);
-    auto planeT = [&](vint<N> i) { return PlaneTN<N>(GridPlaneN<N>(g, a, i), P.org[a], P.inv[a]); };
-    const vbool<N> up = AndNot(in, P.invNeg[a]), down = in & P.invNeg[a];
-    // Each loop is a scalar `while` run on its lanes at once: a lane leaves
-    // it at its first failed test. Lanes stepping up run
-    //   while (c > 0 && T(c) > tEnter) --c;  while (c < res - 1 && T(c + 1) < tEnter) ++c;
-    // lanes stepping down
-    //   while (c < res - 1 && T(c + 1) > tEnter) ++c;  while (c > 0 && T(c) < tEnter) --c;
-    // (the second loop below serves the second of the first and the first of the second).
-    vbool<N> m = up & (c > zero);
-    while (Any(m = m & (planeT(c) > tEnter))) {
-      c = c - Select(m, one, zero);
-      m = m & (c > zero);
-    }
-    m = (up | down) & (c < top);
-    for (;;) {
-      const vfloat<N> tn = planeT(c + one);
-      m = m & ((down & (tn > tEnter)) | AndNot(tn < tEnter, down));
-      if (None(m)) break;
-      c = c + Select(m, one, zero);
-      m = m & (c < top);
-    }
-    m = down & (c > zero);
-    while (Any(m = m & (planeT(c) < tEnter))) {
-      c = c - Select(m, one, zero);
-      m = m & (c > zero);
-    }
-    cell[a] = c;
-  }
+  for (int a = 0; a < 3; ++a)
+    cell[a] = GridPacket_CellAt<N>(vfloat<N>(g.bmin[a]), vfloat<N>(g.cellSize[a]), vint<N>(static_cast<int>(g.res[a])),
+                                   P.org[a], P.dir[a], P.inv[a], P.invNeg[a], tEnter, in);
   return in;
 }
 

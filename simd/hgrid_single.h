@@ -18,6 +18,54 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
+// HGrid_Skip's exit of kernels/hgrid.h: where the ray leaves the box of
+// cells within d - 1 of `cell` (grid g, resolution res, steps `step`): its
+// parameter, the axis of the plane it leaves by and the box's last cell on
+// that axis (x before y before z on ties).
+CR_SIMD_INLINE float HGrid_SkipExit(const GridHeader& g, const Ray& ray, const int step[3], const int cell[3],
+                                    const int res[3], int d, int& axis, int& last)
+{
+  float t = std::numeric_limits<float>::infinity();
+  axis = 0;
+  last = 0;
+  for (int a = 0; a < 3; ++a) {
+    const int b = step[a] > 0 ? std::min(cell[a] + d - 1, res[a] - 1) : std::max(cell[a] - d + 1, 0);
+    const float ta = PlaneT(GridPlane(g, a, step[a] > 0 ? b + 1 : b), ray.org[a], ray.inv[a]);
+    if (ta < t) {
+      t = ta;
+      axis = a;
+      last = b;
+    }
+  }
+  return t;
+}
+
+// The references refs[begin, end) of a cell not in the ray's mailbox
+// (kernels/hgrid.h; slot k at mailbox[k * stride]), in order, a chunk at a
+// time, then tested 4 at a time: the scalar loop's tests. True when an
+// any-hit query is answered.
+template <unsigned kTypes, bool kFast, bool kStats, class PR>
+CR_SIMD_INLINE bool HGrid_TestCell(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
+                                   std::uint32_t end, std::uint32_t* mailbox, int stride, const PR& pr, Hit& hit,
+                                   int anyHit, TraceStatsSum& st)
+{
+  constexpr std::uint32_t kChunk = 32;
+  alignas(16) std::uint32_t fresh[kChunk];
+  std::uint32_t i = begin;
+  while (i < end) {
+    std::uint32_t n = 0;
+    for (; i < end && n < kChunk; ++i) {
+      const std::uint32_t prim = refs[i];
+      std::uint32_t& slot = mailbox[(prim & (CR_HGRID_MAILBOX - 1u)) * std::uint32_t(stride)];
+      if (slot == prim) continue;
+      slot = prim;
+      fresh[n++] = prim;
+    }
+    if (n && RayRefs_Intersect<kTypes, kFast, kStats>(sc, fresh, 0, n, pr, hit, anyHit, st) && anyHit) return true;
+  }
+  return false;
+}
+
 // The walk of one ray from cell `first` of the root grid, entered at
 // tEnter; HGrid_Trace step by step. Each level keeps the crossing parameter
 // of its next plane per axis and recomputes only the axis it stepped (as
@@ -105,17 +153,8 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
       // HGrid_Distance and HGrid_Skip of kernels/hgrid.h.
       const int d = int((cellStart[g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
       if (d >= CR_HGRID_SKIP_MIN) {
-        int axis = 0, last = 0;
-        float t = std::numeric_limits<float>::infinity();
-        for (int a = 0; a < 3; ++a) {
-          const int b = step[a] > 0 ? std::min(cell[a] + d - 1, res[a] - 1) : std::max(cell[a] - d + 1, 0);
-          const float ta = PlaneT(GridPlane(*g, a, step[a] > 0 ? b + 1 : b), ray.org[a], ray.inv[a]);
-          if (ta < t) {
-            t = ta;
-            axis = a;
-            last = b;
-          }
-        }
+        int axis, last;
+        const float t = HGrid_SkipExit(*g, ray, step, cell, res, d, axis, last);
         if (t > tEnter) {
           tEnter = t;
           if (hit.t <= t) return;
@@ -131,22 +170,7 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
         }
       }
     } else {
-      // The references not in the mailbox (kernels/hgrid.h), in order, a
-      // chunk at a time, then tested 4 at a time: the scalar loop's tests.
-      constexpr std::uint32_t kChunk = 32;
-      alignas(16) std::uint32_t fresh[kChunk];
-      std::uint32_t i = begin;
-      while (i < end) {
-        std::uint32_t n = 0;
-        for (; i < end && n < kChunk; ++i) {
-          const std::uint32_t prim = refs[i];
-          std::uint32_t& slot = mailbox[prim & (CR_HGRID_MAILBOX - 1u)];
-          if (slot == prim) continue;
-          slot = prim;
-          fresh[n++] = prim;
-        }
-        if (n && RayRefs_Intersect<kTypes, kFast, kStats>(sc, fresh, 0, n, pr, hit, anyHit, st) && anyHit) return;
-      }
+      if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, mailbox, 1, pr, hit, anyHit, st)) return;
     }
     // Exit face: the smallest crossing, x before y before z on ties (the
     // scalar loop's strict <), chosen without branches.

@@ -1,12 +1,11 @@
 // The hierarchical grid's kernels of one ISA: every type set x precision x
-// statistics, one ray at a time (simd/hgrid_single.h), which also serves as
-// its packet kernel until it has a packet walk. Compiled once per ISA
-// (simd/CMakeLists.txt).
-#include "simd/hgrid_single.h"
+// statistics, N rays at once (simd/hgrid_packet.h) or one at a time
+// (simd/hgrid_single.h). Compiled once per ISA (simd/CMakeLists.txt).
+#include "simd/hgrid_packet.h"
 
 namespace cr::simd::CR_SIMD_NS {
 
-PacketOrder HGridPacketOrder() { return PacketOrder::Input; }
+PacketOrder HGridPacketOrder() { return PacketOrder::DirectionClassesWhenPays; }
 
 KernelFn SelectHGridKernel(const KernelKey& key)
 {
@@ -14,6 +13,7 @@ KernelFn SelectHGridKernel(const KernelKey& key)
   return SelectKernel(key, [&](auto types, auto flags) -> KernelFn {
     constexpr unsigned kTypes = decltype(types)::kValue;
     constexpr bool kFast = decltype(flags)::kFastValue, kStats = decltype(flags)::kStatsValue;
+    if (key.packet) return &HGridPacket_TraceRange<N, kTypes, kFast, kStats>;
     return &HGridSingle_TraceRange<N, kTypes, kFast, kStats>;
   });
 }

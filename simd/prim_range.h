@@ -203,13 +203,18 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
 // passes alone. Not where the scene has spheres: their packet test is cheap
 // enough that lane passes lost (balls 2-7% slower); with every type compiled
 // in (kAllTypes) that is asked of the scene.
+template <int N, unsigned kTypes>
+CR_SIMD_INLINE bool CellRefs_ByLane(const KernelScene& sc, std::uint32_t begin, std::uint32_t end, vbool<N> m)
+{
+  const bool lanePasses = !(kTypes & kSphereBit) || Prim_Count(&sc.ranges, CR_PRIM_SPHERE) == 0;
+  return lanePasses && PopCount(m.Bits()) <= 2 && end - begin >= 4;
+}
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void CellRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
                                        std::uint32_t end, const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m,
                                        int anyHit, unsigned& done, TraceStatsSum& st)
 {
-  const bool lanePasses = !(kTypes & kSphereBit) || Prim_Count(&sc.ranges, CR_PRIM_SPHERE) == 0;
-  if (lanePasses && PopCount(m.Bits()) <= 2 && end - begin >= 4)
+  if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m))
     LaneRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
   else
     PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);

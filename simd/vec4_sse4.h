@@ -147,6 +147,22 @@ CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<4> idx, vint<4>&
   lo = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(2, 0, 2, 0))));
   hi = vint<4>(_mm_castps_si128(_mm_shuffle_ps(q0, q1, _MM_SHUFFLE(3, 1, 3, 1))));
 }
+// base[idx] lane by lane.
+CR_SIMD_INLINE vint<4> Gather(const std::uint32_t* base, vint<4> idx)
+{
+  alignas(16) std::uint32_t i[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(i), idx.v);
+  return vint<4>(_mm_setr_epi32(int(base[i[0]]), int(base[i[1]]), int(base[i[2]]), int(base[i[3]])));
+}
+// a & b, and a >> n (logical, n < 32), lane by lane.
+CR_SIMD_INLINE vint<4> And(vint<4> a, vint<4> b) { return vint<4>(_mm_and_si128(a.v, b.v)); }
+CR_SIMD_INLINE vint<4> ShiftRight(vint<4> a, vint<4> n)
+{
+  alignas(16) std::uint32_t x[4], k[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(x), a.v);
+  _mm_store_si128(reinterpret_cast<__m128i*>(k), n.v);
+  return vint<4>(_mm_setr_epi32(int(x[0] >> k[0]), int(x[1] >> k[1]), int(x[2] >> k[2]), int(x[3] >> k[3])));
+}
 // m ? a : 0, lane by lane.
 CR_SIMD_INLINE vint<4> MaskedOrZero(vbool<4> m, vint<4> a) { return vint<4>(_mm_and_si128(_mm_castps_si128(m.m), a.v)); }
 // (float)i, exact below 2^24 (cell and plane indices).

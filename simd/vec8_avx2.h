@@ -144,6 +144,18 @@ CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<8> idx, vint<8>&
   lo = vint<8>(_mm256_castps_si256(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0))));
   hi = vint<8>(_mm256_castps_si256(_mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1))));
 }
+// base[idx] lane by lane, by scalar loads (as GatherPairs: the AVX2 gather
+// instruction is microcoded and slower on AMD's cores).
+CR_SIMD_INLINE vint<8> Gather(const std::uint32_t* base, vint<8> idx)
+{
+  alignas(32) std::uint32_t i[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(i), idx.v);
+  return vint<8>(_mm256_setr_epi32(int(base[i[0]]), int(base[i[1]]), int(base[i[2]]), int(base[i[3]]),
+                                   int(base[i[4]]), int(base[i[5]]), int(base[i[6]]), int(base[i[7]])));
+}
+// a & b, and a >> n (logical, n < 32), lane by lane.
+CR_SIMD_INLINE vint<8> And(vint<8> a, vint<8> b) { return vint<8>(_mm256_and_si256(a.v, b.v)); }
+CR_SIMD_INLINE vint<8> ShiftRight(vint<8> a, vint<8> n) { return vint<8>(_mm256_srlv_epi32(a.v, n.v)); }
 CR_SIMD_INLINE vint<8> MaskedOrZero(vbool<8> m, vint<8> a)
 {
   return vint<8>(_mm256_and_si256(_mm256_castps_si256(m.m), a.v));

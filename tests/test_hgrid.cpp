@@ -4,6 +4,7 @@
 // cell-plane hard cases (tests/hard/) cover the planes of every level.
 #include <cstring>
 #include <functional>
+#include <string_view>
 
 #include <doctest/doctest.h>
 
@@ -95,19 +96,30 @@ int CheckLayout(const HGridData& h)
   return levels;
 }
 
+// The CPU paths of the hierarchical grid: the scalar backend and the SIMD
+// backend's packet and single-ray walks.
+const char* const kPaths[] = {"scalar", "packet", "single"};
+TraceConfig PathConfig(std::string_view path)
+{
+  TraceConfig cfg;
+  cfg.backend = path == "scalar" ? Backend::Scalar : Backend::Simd;
+  if (cfg.backend == Backend::Simd) cfg.variant = std::string(path);
+  cfg.accel = AccelKind::HGrid;
+  return cfg;
+}
+
 // Checks the hierarchical grid's answers to `rays` against the reference
 // and against the uniform grid's, bit for bit (occlusion: hit or miss), on
-// scalar and SIMD, closest and any hit; returns the hits counted over all.
+// scalar and SIMD (its packet and single-ray walks), closest and any hit;
+// returns the hits counted over all.
 std::size_t CheckAgainstGrid(const Scene& scene, const std::vector<RayRecord>& rays)
 {
   std::size_t hits = 0;
-  for (Backend backend : {Backend::Scalar, Backend::Simd})
+  for (const char* path : kPaths)
     for (bool occlusion : {false, true}) {
-      CAPTURE(BackendName(backend));
+      CAPTURE(path);
       CAPTURE(occlusion);
-      TraceConfig cfg;
-      cfg.backend = backend;
-      cfg.accel = AccelKind::HGrid;
+      TraceConfig cfg = PathConfig(path);
       std::vector<HitRecord> a, b;
       CHECK(test::CheckTracer(scene, cfg, rays, occlusion, &a).wrong == 0);
       cfg.accel = AccelKind::Grid;
@@ -156,16 +168,14 @@ TEST_CASE("hgrid: skipping empty space by distance gives the walk's answers, bit
   CHECK(info.params.find("skip=off") != std::string::npos);
   for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
     const auto rays = test::MakeRays(scene, kind, 64);
-    for (Backend backend : {Backend::Scalar, Backend::Simd})
+    for (const char* path : kPaths)
       for (bool occlusion : {false, true}) {
-        CAPTURE(BackendName(backend));
+        CAPTURE(path);
         CAPTURE(occlusion);
         std::vector<HitRecord> hits[2];
         TraceStatsSum st[2];
         for (int skip = 0; skip < 2; ++skip) {
-          TraceConfig cfg;
-          cfg.backend = backend;
-          cfg.accel = AccelKind::HGrid;
+          TraceConfig cfg = PathConfig(path);
           cfg.params.hgridSkip = skip ? "on" : "off";
           cfg.stats = true;
           CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits[skip], occlusion, &st[skip]);

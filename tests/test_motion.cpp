@@ -146,18 +146,22 @@ TEST_CASE("motion blur: rays with times, every structure x backend, robust and f
       for (Backend backend : backends)
         for (Precision precision : {Precision::Robust, Precision::Fp64}) {
           const auto types = test::ConformanceProgramTypes(precision);  // OpenCL: both scenes share fp64's
-          for (AccelKind accel : kAccelKinds) {
-            TraceConfig cfg;
-            cfg.backend = backend;
-            cfg.accel = accel;
-            cfg.precision = precision;
-            const auto r = test::CheckTracer(*scene, cfg, rays, IsOcclusionKind(kind), nullptr, &times);
-            INFO(scene->path, " ", std::string(RayKindName(kind)), " ", std::string(BackendName(backend)), " ",
-                 std::string(AccelKindName(accel)), " ", std::string(PrecisionName(precision)), ": ", r.wrong,
-                 " wrong of ", r.rays);
-            CHECK(r.rays == rays.size());
-            CHECK(r.wrong == 0);
-          }
+          for (AccelKind accel : kAccelKinds)
+            // SIMD: the packet and single-ray walks (the default picks one).
+            for (const char* variant : {"packet", "single"}) {
+              if (backend != Backend::Simd && variant[0] == 's') continue;
+              TraceConfig cfg;
+              cfg.backend = backend;
+              cfg.accel = accel;
+              cfg.precision = precision;
+              if (backend == Backend::Simd) cfg.variant = variant;
+              const auto r = test::CheckTracer(*scene, cfg, rays, IsOcclusionKind(kind), nullptr, &times);
+              INFO(scene->path, " ", std::string(RayKindName(kind)), " ", std::string(BackendName(backend)), " ",
+                   std::string(AccelKindName(accel)), " ", std::string(PrecisionName(precision)), " ", cfg.variant,
+                   ": ", r.wrong, " wrong of ", r.rays);
+              CHECK(r.rays == rays.size());
+              CHECK(r.wrong == 0);
+            }
         }
       // Embree (the bench baseline): two time steps, its own BVH.
       if (EmbreeAvailable())

@@ -1,4 +1,5 @@
-// The SIMD grid and octree traversals (simd/grid_*.h, simd/octree_*.h), and
+// The SIMD grid, octree and hierarchical grid traversals (simd/grid_*.h,
+// simd/octree_*.h, simd/hgrid_*.h), and
 // the BVH packets' frustum test (simd/bvh_wide_packet.h), on the cases their
 // scalar kernels were made robust for: origins exactly on
 // cell planes, edges and corners, direction components of +0 and -0, and
@@ -24,7 +25,7 @@ using namespace cr;
 
 namespace {
 
-const AccelKind kCellAccels[] = {AccelKind::Grid, AccelKind::Octree};
+const AccelKind kCellAccels[] = {AccelKind::Grid, AccelKind::Octree, AccelKind::HGrid};
 const char* const kVariants[] = {"packet", "single"};
 
 std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
@@ -88,6 +89,29 @@ std::vector<RayRecord> OctreeSnappedRays(const Scene& scene, std::uint64_t n)
       n, 22);
 }
 
+// Origins on the planes of the hierarchical grid's root or of one of its
+// child grids (w picks the grid).
+std::vector<RayRecord> HGridSnappedRays(const Scene& scene, std::uint64_t n)
+{
+  AccelInfo info;
+  const HGridData h = BuildHGrid(scene, AccelParams{}, info);
+  return SnappedRays(
+      h.header.bmin, h.header.bmax,
+      [&](int a, double u, double w) {
+        const std::size_t k = std::size_t(w * double(h.subs.size() + 1)) % (h.subs.size() + 1);
+        const GridHeader& g = k == 0 ? h.header : h.subs[k - 1];
+        return test_simd_cells::Grid_Plane(&g, a, int(std::lround(u * g.res[a])));
+      },
+      n, 23);
+}
+
+std::vector<RayRecord> SnappedRaysFor(AccelKind accel, const Scene& scene, std::uint64_t n)
+{
+  if (accel == AccelKind::Grid) return GridSnappedRays(scene, n);
+  if (accel == AccelKind::HGrid) return HGridSnappedRays(scene, n);
+  return OctreeSnappedRays(scene, n);
+}
+
 std::vector<HitRecord> Trace(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
                              bool occlusion, TraceStatsSum* stats = nullptr)
 {
@@ -107,7 +131,7 @@ std::size_t CountSame(const std::vector<HitRecord>& a, const std::vector<HitReco
 
 }  // namespace
 
-TEST_CASE("simd grid and octree: rays on cell planes with +-0 directions, bit for bit the scalar backend")
+TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions, bit for bit the scalar backend")
 {
   const auto isas = AvailableIsas();
   if (isas.empty()) {
@@ -117,7 +141,7 @@ TEST_CASE("simd grid and octree: rays on cell planes with +-0 directions, bit fo
   for (const std::string& name : test::Scenes({"balls", "teapot", "rings", "tetra", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (AccelKind accel : kCellAccels) {
-      const auto rays = accel == AccelKind::Grid ? GridSnappedRays(scene, 3000) : OctreeSnappedRays(scene, 3000);
+      const auto rays = SnappedRaysFor(accel, scene, 3000);
       for (Precision prec : {Precision::Robust, Precision::Fast})
         for (bool occlusion : {false, true}) {
           TraceConfig scalarCfg;
@@ -149,7 +173,7 @@ TEST_CASE("simd grid and octree: rays on cell planes with +-0 directions, bit fo
   }
 }
 
-TEST_CASE("simd grid and octree: per-ray statistics equal the scalar backend's")
+TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar backend's")
 {
   const auto isas = AvailableIsas();
   if (isas.empty()) return;

@@ -1,0 +1,408 @@
+// Hierarchical grid (kernels/hgrid.h HGrid_Trace), N rays at once: every
+// lane walks its own ray through the grids, as simd/hgrid_single.h walks
+// one, the lanes' states side by side (per lane: the grid walked and its
+// planes, cell, next crossings, cell index, entry parameter, ancestors and
+// mailbox). What every lane does at every cell runs on all lanes at once:
+// the cells' reference ranges are gathered together, and the step to the
+// next cell (the exit axis by the scalar tie rule, the end of the walk at
+// the closest hit so far, the crossing of the new exit plane recomputed
+// from its plane) is one vector pass with per-lane planes. What only some
+// lanes do at a cell runs lane by lane with the single walk's code: the
+// descent into a child grid, the jump over empty cells by their distance
+// (HGrid_Skip), the tests of a cell's references not in the lane's mailbox
+// (4 at a time, HGrid_TestCell), and the return to the parent grid.
+//
+// Per lane this is the single walk, step for step and bit for bit (the same
+// planes, crossings, cells, tests in the same order), so the hits and the
+// per-ray counts are the scalar backend's. As for the uniform grid (simd/
+// grid_packet.h), the walks' dependent chains run side by side, which the
+// single walk leaves to the core's out-of-order window.
+#pragma once
+
+#include <algorithm>
+#include <limits>
+
+#include "simd/grid_single.h"
+#include "simd/hgrid_single.h"
+
+namespace cr::simd::CR_SIMD_NS {
+
+template <int N>
+struct HGridLanes {
+  // The grid each lane walks: header, planes (bmin + i * cellSize), cell
+  // offsets (first), resolution and change of the cell index per step.
+  const GridHeader* g[N];
+  alignas(32) float bmin[3][N], cs[3][N];
+  alignas(32) std::int32_t res[3][N], dIdx[3][N];
+  alignas(32) std::uint32_t first[N], dist[N];  // where the cell offsets and the distance bytes begin
+  // Where each lane is: cell, next crossing per axis, cell index, the
+  // parameter at which it entered the cell, its closest hit's t.
+  alignas(32) std::int32_t cell[3][N];
+  alignas(32) float tNext[3][N];
+  alignas(32) std::uint32_t idx[N];
+  alignas(32) float tEnter[N], hitT[N];
+  struct Saved {
+    const GridHeader* g;
+    int cell[3];
+    float tNext[3];
+    std::uint32_t idx;
+  };
+  Saved stack[N][CR_HGRID_MAX_DEPTH];
+  int sp[N];
+  // The lanes' mailboxes, slot by slot (slot k of lane l: mailbox[k][l]).
+  alignas(32) std::uint32_t mailbox[CR_HGRID_MAILBOX][N];
+};
+
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& P, const Ray* rays, Hit* hits,
+                                     unsigned live, const std::uint32_t (&cells)[3][N], const float* tEnter0,
+                                     int anyHit, TraceStatsSum& st)
+{
+  const std::uint32_t* refs = sc.hgridRefs;
+  HGridLanes<N> L;
+  PackRayOf<4, kHasMotion<kTypes>> prs[N];
+  int step[3][N];
+  float reachPerT[N];
+  // Lane l's grid (the single walk's setGrid).
+  const auto setGrid = [&](int l, const GridHeader* ng) __attribute__((always_inline)) {
+    L.g[l] = ng;
+    L.first[l] = ng->first;
+    L.dist[l] = ng->first + ng->nCells + 1u;
+    const int stride[3] = {1, int(ng->res[0]), int(ng->res[0] * ng->res[1])};
+    for (int a = 0; a < 3; ++a) {
+      L.bmin[a][l] = ng->bmin[a];
+      L.cs[a][l] = ng->cellSize[a];
+      L.res[a][l] = int(ng->res[a]);
+      L.dIdx[a][l] = step[a][l] * stride[a];
+    }
+  };
+  // The ordinary step of lane l: 0 when its walk ends (the closest hit at
+  // or before the cell's exit), 1 when it moved to the next cell of its
+  // grid, 2 when it leaves the grid.
+  const auto stepLane = [&](int l) __attribute__((always_inline)) {
+    const float t0 = L.tNext[0][l], t1 = L.tNext[1][l], t2 = L.tNext[2][l];
+    const float t01 = t1 < t0 ? t1 : t0;
+    const int axis = t2 < t01 ? 2 : (t1 < t0 ? 1 : 0);
+    const float t = L.tNext[axis][l];
+    L.tEnter[l] = t;
+    if (L.hitT[l] <= t) return 0;
+    const int c = L.cell[axis][l] + step[axis][l];
+    if (static_cast<unsigned>(c) >= static_cast<unsigned>(L.res[axis][l])) return 2;
+    L.cell[axis][l] = c;
+    L.idx[l] += static_cast<std::uint32_t>(L.dIdx[axis][l]);
+    L.tNext[axis][l] = PlaneT(GridPlane(*L.g[l], axis, step[axis][l] > 0 ? c + 1 : c), rays[l].org[axis],
+                              rays[l].inv[axis]);
+    return 1;
+  };
+  // Lane l leaves its grid: the walk goes on in the nearest ancestor it
+  // does not leave; false when the lane's walk ends.
+  const auto ascend = [&](int l) {
+    for (;;) {
+      if (L.sp[l] == 0) return false;
+      const typename HGridLanes<N>::Saved& s = L.stack[l][--L.sp[l]];
+      setGrid(l, s.g);
+      for (int a = 0; a < 3; ++a) {
+        L.cell[a][l] = s.cell[a];
+        L.tNext[a][l] = s.tNext[a];
+      }
+      L.idx[l] = s.idx;
+      const int r = stepLane(l);
+      if (r != 2) return r == 1;
+    }
+  };
+  // The lanes of `bits` enter their cells (L.cell): the crossings of their
+  // exit planes and the cell index, as the single walk's enterCell.
+  const auto enterCells = [&](unsigned bits) __attribute__((always_inline)) {
+    const vbool<N> m = vbool<N>::FromBits(bits);
+    vint<N> c[3], res[3];
+    for (int a = 0; a < 3; ++a) {
+      c[a] = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.cell[a]));
+      res[a] = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.res[a]));
+      const vint<N> plane = c[a] + Select(P.invNeg[a], vint<N>(0), vint<N>(1));
+      const vfloat<N> p = vfloat<N>::Load(L.bmin[a]) + ToFloat(plane) * vfloat<N>::Load(L.cs[a]);
+      Select(m, PlaneTN<N>(p, P.org[a], P.inv[a]), vfloat<N>::Load(L.tNext[a])).Store(L.tNext[a]);
+    }
+    const vint<N> idx = c[0] + res[0] * (c[1] + res[1] * c[2]);
+    Select(m, idx, vint<N>::Load(L.idx)).Store(L.idx);
+  };
+  // Grid_EnterAt for the lanes of `bits` at once, each in its grid at its
+  // tEnter, then fix(bits) on the cells, then the lanes enter them.
+  const auto enterAt = [&](unsigned bits, auto fix) __attribute__((always_inline)) {
+    const vbool<N> m = vbool<N>::FromBits(bits);
+    const vfloat<N> t = vfloat<N>::Load(L.tEnter);
+    for (int a = 0; a < 3; ++a) {
+      const vint<N> c = GridPacket_CellAt<N>(
+          vfloat<N>::Load(L.bmin[a]), vfloat<N>::Load(L.cs[a]),
+          vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.res[a])), P.org[a], P.dir[a], P.inv[a], P.invNeg[a], t, m);
+      Select(m, c, vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.cell[a])))
+          .Store(reinterpret_cast<std::uint32_t*>(L.cell[a]));
+    }
+    fix(bits);
+    enterCells(bits);
+  };
+  // Every lane starts in the root (the lanes that do not enter it too, so
+  // that the vector passes read defined values; they are never live).
+  for (int l = 0; l < N; ++l) {
+    const Ray& ray = rays[l];
+    for (int a = 0; a < 3; ++a) {
+      step[a][l] = ray.inv[a] < 0.0f ? -1 : 1;
+      L.tNext[a][l] = 0.0f;
+    }
+    L.idx[l] = 0;
+    reachPerT[l] =
+        CR_HGRID_RAY_ERR * std::max(std::fabs(ray.dir[0]), std::max(std::fabs(ray.dir[1]), std::fabs(ray.dir[2])));
+    L.sp[l] = 0;
+    for (int k = 0; k < CR_HGRID_MAILBOX; ++k) L.mailbox[k][l] = CR_NO_HIT;
+    L.tEnter[l] = tEnter0[l];
+    setGrid(l, sc.hgridHeader);
+    for (int a = 0; a < 3; ++a) L.cell[a][l] = int(cells[a][l]);
+  }
+  enterCells(live);
+  // The lanes' hits as a packet (the packet tests' form), their t also lane
+  // by lane (the scalar steps').
+  HitPacket<N> H;
+  {
+    alignas(32) float t[N], u[N], v[N];
+    alignas(32) std::uint32_t g[N];
+    for (int l = 0; l < N; ++l) {
+      t[l] = hits[l].t;
+      u[l] = hits[l].u;
+      v[l] = hits[l].v;
+      g[l] = hits[l].g;
+    }
+    H.t = vfloat<N>::Load(t);
+    H.u = vfloat<N>::Load(u);
+    H.v = vfloat<N>::Load(v);
+    H.g = vint<N>::Load(g);
+    H.t.Store(L.hitT);
+  }
+  unsigned prReady = 0;  // lanes whose prs[] is prepared
+  vint<N> stepV[3];
+  for (int a = 0; a < 3; ++a) stepV[a] = Select(P.invNeg[a], vint<N>(-1), vint<N>(1));
+  const vint<N> one(1), zero(0);
+  while (live) {
+    if constexpr (kStats) st.nTS += PopCount(live);
+    // The lanes' reference ranges, gathered at once (lanes not live read
+    // the root's first offsets).
+    const vbool<N> liveV = vbool<N>::FromBits(live);
+    vint<N> beginV, endV;
+    GatherPairs(refs, Select(liveV, vint<N>::Load(L.first) + vint<N>::Load(L.idx), vint<N>(int(sc.hgridHeader->first))),
+                beginV, endV);
+    alignas(32) std::uint32_t begins[N], ends[N];
+    beginV.Store(begins);
+    endV.Store(ends);
+    const vbool<N> fullV = AndNot(liveV, beginV == endV);
+    const unsigned full = fullV.Bits();
+    unsigned steps = live;  // the lanes that take the ordinary step below
+    unsigned leaving = 0;   // lanes that leave their grid by a jump
+    unsigned childOnly = 0;  // child cells walked as empty cells (their child too fine for the ray)
+    // Which full cells are child grids (their first item), and which empty
+    // cells lie far enough from full ones to jump from (HGrid_Distance): read
+    // for all lanes at once.
+    const vint<N> head = Gather(refs, Select(fullV, beginV, zero));
+    const unsigned childs = AndNot(fullV, And(head, vint<N>(int(CR_HGRID_CHILD))) == zero).Bits();
+    unsigned jumps = 0;
+    if (const vbool<N> emptyV = AndNot(liveV, fullV); Any(emptyV)) {
+      const vint<N> idxV = vint<N>::Load(L.idx);
+      const vint<N> word = Gather(refs, Select(emptyV, vint<N>::Load(L.dist) + ShiftRight(idxV, vint<N>(2)), zero));
+      const vint<N> d = And(ShiftRight(word, And(idxV, vint<N>(3)) * vint<N>(8)), vint<N>(0xff));
+      jumps = (emptyV & (d > vint<N>(CR_HGRID_SKIP_MIN - 1))).Bits();
+    }
+    // Child cells: a lane descends into the child grid where it is precise
+    // enough for it, else takes the cell's own references.
+    unsigned tests = full & ~childs;
+    unsigned enters = 0;  // lanes that descend: enter their child grid at their tEnter
+    for (unsigned rest = childs; rest; rest &= rest - 1u) {
+      const int l = LowestBit(rest);
+      const unsigned bit = 1u << l;
+      const std::uint32_t begin = begins[l];
+      const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
+      const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
+      if (reachPerT[l] * tExit <= child->margin) {
+        typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
+        s.g = L.g[l];
+        for (int a = 0; a < 3; ++a) {
+          s.cell[a] = L.cell[a][l];
+          s.tNext[a] = L.tNext[a][l];
+        }
+        s.idx = L.idx[l];
+        setGrid(l, child);
+        enters |= bit;
+        continue;
+      }
+      begins[l] = begin + 1u;
+      if (begins[l] == ends[l]) {  // no references of its own: an empty cell (below)
+        childOnly |= bit;
+        continue;
+      }
+      tests |= bit;
+    }
+    if (enters) {
+      enterAt(enters, [](unsigned) {});
+      steps &= ~enters;
+    }
+    // One pass over each cell for the lanes that stand in it (the lanes of
+    // a coherent packet often do): a primitive against the lanes that do not
+    // have it in their mailboxes; lane by lane where one or two lanes stand
+    // in a cell of four references or more (CellRefs_ByLane).
+    if (tests) {
+      const vint<N> bv = vint<N>::Load(begins);
+      unsigned done = 0;  // occlusion: lanes with an occluder
+      for (unsigned pending = tests; pending;) {
+        const int l0 = LowestBit(pending);
+        vbool<N> m = vbool<N>::FromBits(tests) & (bv == vint<N>(int(begins[l0])));
+        pending &= ~m.Bits();
+        if constexpr (kStats) st.nLeaves += PopCount(m.Bits());
+        const std::uint32_t begin = begins[l0], end = ends[l0];
+        if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m)) {
+          for (unsigned r = m.Bits(); r; r &= r - 1u) {
+            const int l = LowestBit(r);
+            if (!((prReady >> l) & 1u)) {
+              PackRay_Init<4>(prs[l], rays[l]);
+              if constexpr (kHasMotion<kTypes>) prs[l].time = rays[l].time;
+              prs[l].anyHit = anyHit != 0;
+              prReady |= 1u << l;
+            }
+            Hit hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+            const bool answered = HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N,
+                                                                        prs[l], hit, anyHit, st);
+            const vbool<N> lane = vbool<N>::FromBits(1u << l);
+            H.t = Select(lane, vfloat<N>(hit.t), H.t);
+            H.u = Select(lane, vfloat<N>(hit.u), H.u);
+            H.v = Select(lane, vfloat<N>(hit.v), H.v);
+            H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+            if (answered) done |= 1u << l;
+          }
+          continue;
+        }
+        for (std::uint32_t i = begin; i < end; ++i) {
+          const std::uint32_t prim = refs[i];
+          std::uint32_t* row = L.mailbox[prim & (CR_HGRID_MAILBOX - 1u)];
+          const vint<N> slot = vint<N>::Load(row);
+          const vint<N> pv(static_cast<int>(prim));
+          const vbool<N> fresh = AndNot(m, slot == pv);
+          Select(m, pv, slot).Store(row);
+          if (None(fresh)) continue;
+          if constexpr (kStats) st.nIT += PopCount(fresh.Bits());
+          const vbool<N> changed = PacketPrim_Intersect<N, kTypes, kFast>(sc, prim, P, H, fresh);
+          if (anyHit && Any(changed)) {
+            done |= changed.Bits();
+            m = AndNot(m, changed);
+            if (None(m)) break;
+          }
+        }
+      }
+      if (done) {
+        live &= ~done;
+        steps &= ~done;
+      }
+      H.t.Store(L.hitT);
+    }
+    // Empty cells (and child cells without references of their own whose
+    // child is too fine for the ray): HGrid_Skip where the cell's distance
+    // allows a jump; the statistics count every empty cell.
+    if constexpr (kStats) {
+      const unsigned empties = (steps & ~full) | childOnly;
+      st.nLeaves += PopCount(empties);
+      st.nEmptyLeaves += PopCount(empties);
+    }
+    unsigned jumped = 0;  // lanes that jump to cell jumpNext on axis jumpAxis
+    int jumpAxis[N], jumpNext[N];
+    for (unsigned rest = jumps | childOnly; rest; rest &= rest - 1u) {
+      const int l = LowestBit(rest);
+      const unsigned bit = 1u << l;
+      const GridHeader& g = *L.g[l];
+      const std::uint32_t idx = L.idx[l];
+      const int d = int((refs[L.dist[l] + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
+      if (d < CR_HGRID_SKIP_MIN) continue;
+      const int st3[3] = {step[0][l], step[1][l], step[2][l]};
+      const int cell[3] = {L.cell[0][l], L.cell[1][l], L.cell[2][l]};
+      const int res[3] = {L.res[0][l], L.res[1][l], L.res[2][l]};
+      int axis, last;
+      const float t = HGrid_SkipExit(g, rays[l], st3, cell, res, d, axis, last);
+      if (!(t > L.tEnter[l])) continue;
+      L.tEnter[l] = t;
+      steps &= ~bit;
+      if (L.hitT[l] <= t) {
+        live &= ~bit;
+        continue;
+      }
+      const int next = last + st3[axis];
+      if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
+        jumpAxis[l] = axis;
+        jumpNext[l] = next;
+        jumped |= bit;
+      } else {
+        leaving |= bit;
+      }
+    }
+    // The lanes that jumped within their grid: the cell across the box's
+    // exit plane, at its parameter (Grid_EnterAt's on the other axes).
+    if (jumped)
+      enterAt(jumped, [&](unsigned bits) {
+        for (; bits; bits &= bits - 1u) {
+          const int l = LowestBit(bits);
+          L.cell[jumpAxis[l]][l] = jumpNext[l];
+        }
+      });
+    // The ordinary step, on the lanes that take it at once.
+    if (steps) {
+      const vbool<N> m = vbool<N>::FromBits(steps);
+      vfloat<N> tn[3];
+      vint<N> c[3];
+      for (int a = 0; a < 3; ++a) {
+        tn[a] = vfloat<N>::Load(L.tNext[a]);
+        c[a] = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.cell[a]));
+      }
+      vbool<N> s[3];
+      s[2] = (tn[2] < tn[0]) & (tn[2] < tn[1]);
+      s[1] = AndNot(tn[1] < tn[0], s[2]);
+      s[0] = !(s[1] | s[2]);
+      const vfloat<N> tE = Select(s[2], tn[2], Select(s[1], tn[1], tn[0]));
+      const vbool<N> ended = m & (H.t <= tE);
+      vbool<N> out = ended;  // stays out of range: lanes that end do not move
+      vint<N> nc[3];
+      for (int a = 0; a < 3; ++a) {
+        nc[a] = c[a] + MaskedOrZero(s[a], stepV[a]);
+        const vint<N> res = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.res[a]));
+        out = out | (s[a] & !LessUnsigned(nc[a], res));
+      }
+      const vbool<N> move = AndNot(m, out);
+      vint<N> idx = vint<N>::Load(L.idx);
+      for (int a = 0; a < 3; ++a) {
+        const vbool<N> ma = move & s[a];
+        const vint<N> dIdx = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.dIdx[a]));
+        idx = idx + MaskedOrZero(ma, dIdx);
+        const vint<N> plane = nc[a] + Select(P.invNeg[a], zero, one);
+        const vfloat<N> p = vfloat<N>::Load(L.bmin[a]) + ToFloat(plane) * vfloat<N>::Load(L.cs[a]);
+        Select(ma, PlaneTN<N>(p, P.org[a], P.inv[a]), tn[a]).Store(L.tNext[a]);
+        Select(ma, nc[a], c[a]).Store(reinterpret_cast<std::uint32_t*>(L.cell[a]));
+      }
+      idx.Store(L.idx);
+      Select(m, tE, vfloat<N>::Load(L.tEnter)).Store(L.tEnter);
+      live &= ~ended.Bits();
+      leaving |= AndNot(AndNot(m, ended), move).Bits();
+    }
+    for (unsigned rest = leaving; rest; rest &= rest - 1u) {
+      const int l = LowestBit(rest);
+      if (!ascend(l)) live &= ~(1u << l);
+    }
+  }
+  for (int l = 0; l < N; ++l) hits[l] = Hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+}
+
+// Traces positions [job.begin, job.end) in packets of N.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+void HGridPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
+{
+  TraceStatsSum st;
+  GridEntry_Packets<N, kFast, kHasMotion<kTypes>, true>(
+      sc, *sc.hgridHeader, job,
+      [&](const RayPacket<N>& P, const Ray* rays, Hit* hits, unsigned in, const std::uint32_t (&cells)[3][N],
+          const float* tEnter) {
+        if (in) HGridPacket_Walk<N, kTypes, kFast, kStats>(sc, P, rays, hits, in, cells, tEnter, job.occlusion, st);
+      });
+  if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
+}
+
+}  // namespace cr::simd::CR_SIMD_NS
