@@ -27,6 +27,10 @@
 
 namespace cr::simd::CR_SIMD_NS {
 
+// A packet's last lanes, this many or fewer, finish their walks one at a
+// time (finishLane).
+inline constexpr int kHGridFinishLanes = 2;
+
 template <int N>
 struct HGridLanes {
   // The grid each lane walks: header, planes (bmin + i * cellSize), cell
@@ -177,10 +181,106 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
     H.t.Store(L.hitT);
   }
   unsigned prReady = 0;  // lanes whose prs[] is prepared
+  const auto packRay = [&](int l) -> const PackRayOf<4, kHasMotion<kTypes>>& {
+    if (!((prReady >> l) & 1u)) {
+      PackRay_Init<4>(prs[l], rays[l]);
+      if constexpr (kHasMotion<kTypes>) prs[l].time = rays[l].time;
+      prs[l].anyHit = anyHit != 0;
+      prReady |= 1u << l;
+    }
+    return prs[l];
+  };
+  // The walk of lane l alone, from its cell on, to its end: the single
+  // walk's loop on the lane's state (for the last lanes of a packet, whose
+  // vector passes would run mostly empty).
+  const auto finishLane = [&](int l) {
+    const Ray& ray = rays[l];
+    Hit hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+    const auto enterCell = [&](const int c[3]) __attribute__((always_inline)) {
+      const GridHeader& g = *L.g[l];
+      for (int a = 0; a < 3; ++a) {
+        L.cell[a][l] = c[a];
+        L.tNext[a][l] = PlaneT(GridPlane(g, a, step[a][l] > 0 ? c[a] + 1 : c[a]), ray.org[a], ray.inv[a]);
+      }
+      L.idx[l] = std::uint32_t(c[0]) + g.res[0] * (std::uint32_t(c[1]) + g.res[1] * std::uint32_t(c[2]));
+    };
+    for (;;) {
+      if constexpr (kStats) ++st.nTS;
+      const GridHeader& g = *L.g[l];
+      const std::uint32_t idx = L.idx[l];
+      std::uint32_t begin = refs[L.first[l] + idx];
+      const std::uint32_t end = refs[L.first[l] + idx + 1];
+      if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
+        const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
+        const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
+        if (reachPerT[l] * tExit <= child->margin) {
+          typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
+          s.g = L.g[l];
+          for (int a = 0; a < 3; ++a) {
+            s.cell[a] = L.cell[a][l];
+            s.tNext[a] = L.tNext[a][l];
+          }
+          s.idx = idx;
+          setGrid(l, child);
+          int c[3];
+          GridSingle_EnterAt(*child, ray, L.tEnter[l], c);
+          enterCell(c);
+          continue;
+        }
+        ++begin;
+      }
+      if constexpr (kStats) ++st.nLeaves;
+      bool leave = false;
+      if (begin == end) {
+        if constexpr (kStats) ++st.nEmptyLeaves;
+        const int d = int((refs[L.dist[l] + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
+        if (d >= CR_HGRID_SKIP_MIN) {
+          const int st3[3] = {step[0][l], step[1][l], step[2][l]};
+          const int cell[3] = {L.cell[0][l], L.cell[1][l], L.cell[2][l]};
+          const int res[3] = {L.res[0][l], L.res[1][l], L.res[2][l]};
+          int axis, last;
+          const float t = HGrid_SkipExit(g, ray, st3, cell, res, d, axis, last);
+          if (t > L.tEnter[l]) {
+            L.tEnter[l] = t;
+            if (hit.t <= t) break;
+            const int next = last + st3[axis];
+            if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
+              int c[3];
+              GridSingle_EnterAt(g, ray, t, c);
+              c[axis] = next;
+              enterCell(c);
+              continue;
+            }
+            leave = true;
+          }
+        }
+      } else {
+        if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N, packRay(l), hit, anyHit,
+                                                  st))
+          break;
+        L.hitT[l] = hit.t;
+      }
+      if (!leave) {
+        const int r = stepLane(l);
+        if (r == 0) break;
+        if (r == 1) continue;
+      }
+      if (!ascend(l)) break;
+    }
+    const vbool<N> lane = vbool<N>::FromBits(1u << l);
+    H.t = Select(lane, vfloat<N>(hit.t), H.t);
+    H.u = Select(lane, vfloat<N>(hit.u), H.u);
+    H.v = Select(lane, vfloat<N>(hit.v), H.v);
+    H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+  };
   vint<N> stepV[3];
   for (int a = 0; a < 3; ++a) stepV[a] = Select(P.invNeg[a], vint<N>(-1), vint<N>(1));
   const vint<N> one(1), zero(0);
   while (live) {
+    if (PopCount(live) <= kHGridFinishLanes) {
+      for (unsigned rest = live; rest; rest &= rest - 1u) finishLane(LowestBit(rest));
+      break;
+    }
     if constexpr (kStats) st.nTS += PopCount(live);
     // The lanes' reference ranges, gathered at once (lanes not live read
     // the root's first offsets).
@@ -257,15 +357,9 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
         if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m)) {
           for (unsigned r = m.Bits(); r; r &= r - 1u) {
             const int l = LowestBit(r);
-            if (!((prReady >> l) & 1u)) {
-              PackRay_Init<4>(prs[l], rays[l]);
-              if constexpr (kHasMotion<kTypes>) prs[l].time = rays[l].time;
-              prs[l].anyHit = anyHit != 0;
-              prReady |= 1u << l;
-            }
             Hit hit{H.t[l], H.u[l], H.v[l], H.g[l]};
             const bool answered = HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N,
-                                                                        prs[l], hit, anyHit, st);
+                                                                        packRay(l), hit, anyHit, st);
             const vbool<N> lane = vbool<N>::FromBits(1u << l);
             H.t = Select(lane, vfloat<N>(hit.t), H.t);
             H.u = Select(lane, vfloat<N>(hit.u), H.u);

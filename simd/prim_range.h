@@ -89,7 +89,10 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
   bool changed = false;
   for (; i < e; i += K) {
     const std::uint32_t count = e - i < std::uint32_t(K) ? e - i : std::uint32_t(K);
-    if constexpr (kStats) st.nIT += count;
+    // Tests counted as the scalar loop counts them: an occlusion query
+    // stops at its first occluder (counted below), else all of the group.
+    if constexpr (kStats)
+      if (!anyHit) st.nIT += count;
     alignas(16) std::uint32_t g[K];
     for (int l = 0; l < K; ++l) g[l] = refs[i + (std::uint32_t(l) < count ? std::uint32_t(l) : count - 1)];
     const vbool<K> valid = vbool<K>::FromBits((1u << count) - 1u);
@@ -101,6 +104,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       const vbool<K> ok = SimdTest<T>::template Gather<kFast>(sc, g, ray, vfloat<K>(hit.t), t, u, v);
       if (anyHit) {
         const unsigned bits = (valid & ok).Bits();
+        if constexpr (kStats) st.nIT += bits ? std::uint32_t(LowestBit(bits) + 1) : count;
         if (!bits) continue;
         const int lane = LowestBit(bits);
         const float tl = t[lane];
@@ -119,6 +123,7 @@ CR_SIMD_INLINE bool RayRun_Intersect(const KernelScene& sc, const std::uint32_t*
       // The first occluder in reference order, as the scalar loop finds it
       // (the hit is still the ray's tmax: nothing was found before).
       const unsigned bits = (valid & ok).Bits();
+      if constexpr (kStats) st.nIT += bits ? std::uint32_t(LowestBit(bits) + 1) : count;
       if (!bits) continue;
       const int lane = LowestBit(bits);
       const float tl = t[lane];

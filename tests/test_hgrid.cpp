@@ -98,7 +98,7 @@ int CheckLayout(const HGridData& h)
 
 // The CPU paths of the hierarchical grid: the scalar backend and the SIMD
 // backend's packet and single-ray walks.
-const char* const kPaths[] = {"scalar", "packet", "single"};
+const std::string kPaths[] = {"scalar", "packet", "single"};
 TraceConfig PathConfig(std::string_view path)
 {
   TraceConfig cfg;
@@ -115,7 +115,7 @@ TraceConfig PathConfig(std::string_view path)
 std::size_t CheckAgainstGrid(const Scene& scene, const std::vector<RayRecord>& rays)
 {
   std::size_t hits = 0;
-  for (const char* path : kPaths)
+  for (const std::string& path : kPaths)
     for (bool occlusion : {false, true}) {
       CAPTURE(path);
       CAPTURE(occlusion);
@@ -168,7 +168,7 @@ TEST_CASE("hgrid: skipping empty space by distance gives the walk's answers, bit
   CHECK(info.params.find("skip=off") != std::string::npos);
   for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
     const auto rays = test::MakeRays(scene, kind, 64);
-    for (const char* path : kPaths)
+    for (const std::string& path : kPaths)
       for (bool occlusion : {false, true}) {
         CAPTURE(path);
         CAPTURE(occlusion);

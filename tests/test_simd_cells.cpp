@@ -181,13 +181,14 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
       const auto rays = test::MakeRays(scene, kind, 32);
-      for (AccelKind accel : kCellAccels) {
+      for (AccelKind accel : kCellAccels)
+        for (bool occlusion : {false, true}) {
         TraceConfig scalarCfg;
         scalarCfg.backend = Backend::Scalar;
         scalarCfg.accel = accel;
         scalarCfg.stats = true;
         TraceStatsSum want;
-        const auto scalarHits = Trace(scene, scalarCfg, rays, false, &want);
+        const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion, &want);
         REQUIRE(want.nTS > 0);
         REQUIRE(want.nIT > 0);
         for (const std::string& isa : isas)
@@ -197,8 +198,9 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
             cfg.isa = isa;
             cfg.variant = variant;
             TraceStatsSum got;
-            const auto hits = Trace(scene, cfg, rays, false, &got);
-            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant);
+            const auto hits = Trace(scene, cfg, rays, occlusion, &got);
+            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant,
+                 occlusion ? " occlusion" : " closest");
             CHECK(CountSame(hits, scalarHits) == rays.size());
             CHECK(got.rays == want.rays);
             CHECK(got.nTS == want.nTS);
