@@ -296,18 +296,10 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
     unsigned steps = live;  // the lanes that take the ordinary step below
     unsigned leaving = 0;   // lanes that leave their grid by a jump
     unsigned childOnly = 0;  // child cells walked as empty cells (their child too fine for the ray)
-    // Which full cells are child grids (their first item), and which empty
-    // cells lie far enough from full ones to jump from (HGrid_Distance): read
-    // for all lanes at once.
+    // Which full cells are child grids (their first item), read for all
+    // lanes at once.
     const vint<N> head = Gather(refs, Select(fullV, beginV, zero));
     const unsigned childs = AndNot(fullV, And(head, vint<N>(int(CR_HGRID_CHILD))) == zero).Bits();
-    unsigned jumps = 0;
-    if (const vbool<N> emptyV = AndNot(liveV, fullV); Any(emptyV)) {
-      const vint<N> idxV = vint<N>::Load(L.idx);
-      const vint<N> word = Gather(refs, Select(emptyV, vint<N>::Load(L.dist) + ShiftRight(idxV, vint<N>(2)), zero));
-      const vint<N> d = And(ShiftRight(word, And(idxV, vint<N>(3)) * vint<N>(8)), vint<N>(0xff));
-      jumps = (emptyV & (d > vint<N>(CR_HGRID_SKIP_MIN - 1))).Bits();
-    }
     // Child cells: a lane descends into the child grid where it is precise
     // enough for it, else takes the cell's own references.
     unsigned tests = full & ~childs;
@@ -393,52 +385,65 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       H.t.Store(L.hitT);
     }
     // Empty cells (and child cells without references of their own whose
-    // child is too fine for the ray): HGrid_Skip where the cell's distance
-    // allows a jump; the statistics count every empty cell.
+    // child is too fine for the ray): HGrid_Distance and HGrid_Skip on all
+    // of them at once; the statistics count every empty cell.
+    const unsigned empties = (steps & ~full) | childOnly;
     if constexpr (kStats) {
-      const unsigned empties = (steps & ~full) | childOnly;
       st.nLeaves += PopCount(empties);
       st.nEmptyLeaves += PopCount(empties);
     }
-    unsigned jumped = 0;  // lanes that jump to cell jumpNext on axis jumpAxis
-    int jumpAxis[N], jumpNext[N];
-    for (unsigned rest = jumps | childOnly; rest; rest &= rest - 1u) {
-      const int l = LowestBit(rest);
-      const unsigned bit = 1u << l;
-      const GridHeader& g = *L.g[l];
-      const std::uint32_t idx = L.idx[l];
-      const int d = int((refs[L.dist[l] + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
-      if (d < CR_HGRID_SKIP_MIN) continue;
-      const int st3[3] = {step[0][l], step[1][l], step[2][l]};
-      const int cell[3] = {L.cell[0][l], L.cell[1][l], L.cell[2][l]};
-      const int res[3] = {L.res[0][l], L.res[1][l], L.res[2][l]};
-      int axis, last;
-      const float t = HGrid_SkipExit(g, rays[l], st3, cell, res, d, axis, last);
-      if (!(t > L.tEnter[l])) continue;
-      L.tEnter[l] = t;
-      steps &= ~bit;
-      if (L.hitT[l] <= t) {
-        live &= ~bit;
-        continue;
-      }
-      const int next = last + st3[axis];
-      if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
-        jumpAxis[l] = axis;
-        jumpNext[l] = next;
-        jumped |= bit;
-      } else {
-        leaving |= bit;
+    if (empties) {
+      const vbool<N> emptyV = vbool<N>::FromBits(empties);
+      const vint<N> idxV = vint<N>::Load(L.idx);
+      const vint<N> word = Gather(refs, Select(emptyV, vint<N>::Load(L.dist) + ShiftRight(idxV, vint<N>(2)), zero));
+      const vint<N> d = And(ShiftRight(word, And(idxV, vint<N>(3)) * vint<N>(8)), vint<N>(0xff));
+      const vbool<N> far = emptyV & (d > vint<N>(CR_HGRID_SKIP_MIN - 1));
+      if (Any(far)) {
+        // HGrid_SkipExit on each lane: the box's exit over the three axes,
+        // x before y before z on ties (strict <).
+        vint<N> c[3], res[3];
+        vfloat<N> best(std::numeric_limits<float>::infinity());
+        vint<N> axisV = zero, lastV = zero, stepA = zero, resA = zero;
+        const vint<N> dm1 = d - one;
+        for (int a = 0; a < 3; ++a) {
+          c[a] = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.cell[a]));
+          res[a] = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.res[a]));
+          const vint<N> hi = c[a] + dm1, top = res[a] - one, lo = c[a] - dm1;
+          const vint<N> b = Select(P.invNeg[a], Select(lo > zero, lo, zero), Select(hi < top, hi, top));
+          const vint<N> plane = b + Select(P.invNeg[a], zero, one);
+          const vfloat<N> ta =
+              PlaneTN<N>(vfloat<N>::Load(L.bmin[a]) + ToFloat(plane) * vfloat<N>::Load(L.cs[a]), P.org[a], P.inv[a]);
+          const vbool<N> take = ta < best;
+          best = Select(take, ta, best);
+          axisV = Select(take, vint<N>(a), axisV);
+          lastV = Select(take, b, lastV);
+          stepA = Select(take, stepV[a], stepA);
+          resA = Select(take, res[a], resA);
+        }
+        const vfloat<N> tEnterV = vfloat<N>::Load(L.tEnter);
+        const vbool<N> go = far & (best > tEnterV);  // else the ordinary step
+        if (Any(go)) {
+          Select(go, best, tEnterV).Store(L.tEnter);
+          const vbool<N> stop = go & (H.t <= best);
+          const vint<N> next = lastV + stepA;
+          const vbool<N> inside = LessUnsigned(next, resA);
+          const vbool<N> moved = AndNot(go & inside, stop);
+          steps &= ~go.Bits();
+          live &= ~stop.Bits();
+          leaving |= AndNot(AndNot(go, inside), stop).Bits();
+          // The cell across the box's exit plane, at its parameter
+          // (Grid_EnterAt's on the other two axes).
+          if (Any(moved))
+            enterAt(moved.Bits(), [&](unsigned) {
+              for (int a = 0; a < 3; ++a) {
+                const vbool<N> on = moved & (axisV == vint<N>(a));
+                const vint<N> ca = vint<N>::Load(reinterpret_cast<const std::uint32_t*>(L.cell[a]));
+                Select(on, next, ca).Store(reinterpret_cast<std::uint32_t*>(L.cell[a]));
+              }
+            });
+        }
       }
     }
-    // The lanes that jumped within their grid: the cell across the box's
-    // exit plane, at its parameter (Grid_EnterAt's on the other axes).
-    if (jumped)
-      enterAt(jumped, [&](unsigned bits) {
-        for (; bits; bits &= bits - 1u) {
-          const int l = LowestBit(bits);
-          L.cell[jumpAxis[l]][l] = jumpNext[l];
-        }
-      });
     // The ordinary step, on the lanes that take it at once.
     if (steps) {
       const vbool<N> m = vbool<N>::FromBits(steps);
