@@ -22,6 +22,7 @@ struct HardOptions {
   std::vector<Precision> precisions;  // empty: fast, robust, fp64
   bool quick = false;                 // reduced ray counts (CI)
   std::vector<std::string> cases;     // empty: every case; else names or name prefixes ("leaks/")
+  std::string simdVariant;            // the SIMD backend's --variant (packet, single; empty: auto)
   std::function<void(const HardCaseResult&)> onResult;  // progress: called after each combination
 };
 
