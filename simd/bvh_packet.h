@@ -245,6 +245,27 @@ struct HitLanes {
   }
 };
 
+// Lane l of a packet's hits, and a hit into lane l.
+template <int N>
+CR_SIMD_INLINE Hit HitPacket_Lane(const HitPacket<N>& H, int l)
+{
+  Hit h;
+  h.t = H.t[l];
+  h.u = H.u[l];
+  h.v = H.v[l];
+  h.g = H.g[l];
+  return h;
+}
+template <int N>
+CR_SIMD_INLINE void HitPacket_SetLane(HitPacket<N>& H, int l, const Hit& h)
+{
+  const vbool<N> lane = vbool<N>::FromBits(1u << l);
+  H.t = Select(lane, vfloat<N>(h.t), H.t);
+  H.u = Select(lane, vfloat<N>(h.u), H.u);
+  H.v = Select(lane, vfloat<N>(h.v), H.v);
+  H.g = Select(lane, vint<N>(static_cast<int>(h.g)), H.g);
+}
+
 // Writes the hits of the first `count` lanes.
 template <int N>
 CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, const KernelJob& job,

@@ -80,6 +80,18 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       L.dIdx[a][l] = step[a][l] * stride[a];
     }
   };
+  // Lane l into child grid `child`: its grid and cell onto its stack (the
+  // cell within the child is entered by the caller).
+  const auto descend = [&](int l, const GridHeader* child) __attribute__((always_inline)) {
+    typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
+    s.g = L.g[l];
+    for (int a = 0; a < 3; ++a) {
+      s.cell[a] = L.cell[a][l];
+      s.tNext[a] = L.tNext[a][l];
+    }
+    s.idx = L.idx[l];
+    setGrid(l, child);
+  };
   // The ordinary step of lane l: 0 when its walk ends (the closest hit at
   // or before the cell's exit), 1 when it moved to the next cell of its
   // grid, 2 when it leaves the grid.
@@ -195,7 +207,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
   // vector passes would run mostly empty).
   const auto finishLane = [&](int l) {
     const Ray& ray = rays[l];
-    Hit hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+    Hit hit = HitPacket_Lane<N>(H, l);
     const auto enterCell = [&](const int c[3]) __attribute__((always_inline)) {
       const GridHeader& g = *L.g[l];
       for (int a = 0; a < 3; ++a) {
@@ -214,14 +226,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
         const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
         const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
         if (reachPerT[l] * tExit <= child->margin) {
-          typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
-          s.g = L.g[l];
-          for (int a = 0; a < 3; ++a) {
-            s.cell[a] = L.cell[a][l];
-            s.tNext[a] = L.tNext[a][l];
-          }
-          s.idx = idx;
-          setGrid(l, child);
+          descend(l, child);
           int c[3];
           GridSingle_EnterAt(*child, ray, L.tEnter[l], c);
           enterCell(c);
@@ -267,11 +272,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       }
       if (!ascend(l)) break;
     }
-    const vbool<N> lane = vbool<N>::FromBits(1u << l);
-    H.t = Select(lane, vfloat<N>(hit.t), H.t);
-    H.u = Select(lane, vfloat<N>(hit.u), H.u);
-    H.v = Select(lane, vfloat<N>(hit.v), H.v);
-    H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+    HitPacket_SetLane<N>(H, l, hit);
   };
   vint<N> stepV[3];
   for (int a = 0; a < 3; ++a) stepV[a] = Select(P.invNeg[a], vint<N>(-1), vint<N>(1));
@@ -311,14 +312,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
       const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
       if (reachPerT[l] * tExit <= child->margin) {
-        typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
-        s.g = L.g[l];
-        for (int a = 0; a < 3; ++a) {
-          s.cell[a] = L.cell[a][l];
-          s.tNext[a] = L.tNext[a][l];
-        }
-        s.idx = L.idx[l];
-        setGrid(l, child);
+        descend(l, child);
         enters |= bit;
         continue;
       }
@@ -349,14 +343,10 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
         if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m)) {
           for (unsigned r = m.Bits(); r; r &= r - 1u) {
             const int l = LowestBit(r);
-            Hit hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+            Hit hit = HitPacket_Lane<N>(H, l);
             const bool answered = HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N,
                                                                         packRay(l), hit, anyHit, st);
-            const vbool<N> lane = vbool<N>::FromBits(1u << l);
-            H.t = Select(lane, vfloat<N>(hit.t), H.t);
-            H.u = Select(lane, vfloat<N>(hit.u), H.u);
-            H.v = Select(lane, vfloat<N>(hit.v), H.v);
-            H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+            HitPacket_SetLane<N>(H, l, hit);
             if (answered) done |= 1u << l;
           }
           continue;
@@ -487,7 +477,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       if (!ascend(l)) live &= ~(1u << l);
     }
   }
-  for (int l = 0; l < N; ++l) hits[l] = Hit{H.t[l], H.u[l], H.v[l], H.g[l]};
+  for (int l = 0; l < N; ++l) hits[l] = HitPacket_Lane<N>(H, l);
 }
 
 // Traces positions [job.begin, job.end) in packets of N.

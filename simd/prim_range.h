@@ -185,17 +185,9 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
     pr.dd = vfloat<4>(P.dd[l]);
     pr.anyHit = anyHit != 0;
     if constexpr (kHasMotion<kTypes>) pr.time = RayPacket_Time<N>(P)[l];
-    Hit hit;
-    hit.t = H.t[l];
-    hit.u = H.u[l];
-    hit.v = H.v[l];
-    hit.g = H.g[l];
+    Hit hit = HitPacket_Lane<N>(H, l);
     if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st)) {
-      const vbool<N> lane = vbool<N>::FromBits(1u << l);
-      H.t = Select(lane, vfloat<N>(hit.t), H.t);
-      H.u = Select(lane, vfloat<N>(hit.u), H.u);
-      H.v = Select(lane, vfloat<N>(hit.v), H.v);
-      H.g = Select(lane, vint<N>(static_cast<int>(hit.g)), H.g);
+      HitPacket_SetLane<N>(H, l, hit);
       if (anyHit) done |= 1u << l;
     }
   }
