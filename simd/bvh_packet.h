@@ -243,6 +243,22 @@ struct HitLanes {
     H.v = vfloat<N>::Load(v);
     H.g = vint<N>::Load(g);
   }
+  Hit Get(int l) const
+  {
+    Hit h;
+    h.t = t[l];
+    h.u = u[l];
+    h.v = v[l];
+    h.g = g[l];
+    return h;
+  }
+  void Set(int l, const Hit& h)
+  {
+    t[l] = h.t;
+    u[l] = h.u;
+    v[l] = h.v;
+    g[l] = h.g;
+  }
 };
 
 // Lane l of a packet's hits, and a hit into lane l.
@@ -273,11 +289,7 @@ CR_SIMD_INLINE void Packet_StoreHits(const KernelScene& sc, const PrimView& pv, 
 {
   const HitLanes<N> L(H);
   for (int l = 0; l < count; ++l) {
-    Hit h;
-    h.t = L.t[l];
-    h.u = L.u[l];
-    h.v = L.v[l];
-    h.g = L.g[l];
+    const Hit h = L.Get(l);
     job.hits[idx[l]] = Hit_ToRecord(&h, &pv, sc.primIds, job.occlusion, sc.unifiedHits);
   }
 }

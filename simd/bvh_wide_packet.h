@@ -160,20 +160,12 @@ CR_SIMD_INLINE void BVHWidePacket_Trace(const KernelScene& sc, const RayPacket<N
         const int l = LowestBit(rest);
         Ray& ray = rays[l];
         ray.tmax = L.t[l];
-        Hit hit;
-        Hit_Init(&hit, &ray);
-        hit.t = L.t[l];
-        hit.u = L.u[l];
-        hit.v = L.v[l];
-        hit.g = L.g[l];
+        Hit hit = L.Get(l);
         const std::uint32_t g0 = hit.g;
         const float t0 = hit.t;
         BVHSingle_TraceFrom<N, K, kTypes, kFast, kStats>(sc, ray, hit, anyHit, st, ref, meta);
         if (hit.g != g0 || hit.t != t0) {
-          L.t[l] = hit.t;
-          L.u[l] = hit.u;
-          L.v[l] = hit.v;
-          L.g[l] = hit.g;
+          L.Set(l, hit);
           done |= 1u << l;
         }
       }

@@ -16,12 +16,13 @@ namespace cr::simd::CR_SIMD_NS {
 
 // Positions [job.begin, job.end) of a grid-walking structure whose root is
 // grid g, N rays at a time: rays prepared and entered N at a time, then
-// walk(P, rays, hits, in, cells, tEnter) with the packet, its rays and hits
-// lane by lane (hits from Hit_Init), the lanes that enter the grid (bits of
-// `in`), their first cells and entry parameters; the answers to job.hits.
-// kTiles: packets as Packet_Rays forms them (image tiles where the job has
-// them), else in job order. kMotion (a moving scene): each ray also takes
-// its time (Ray::time; the packet's, RayPacketOf).
+// walk(P, H, rays, in, cells, tEnter) with the packet, its hits (as Hit_Init
+// leaves them; the walk updates them), its rays lane by lane, the lanes that
+// enter the grid (bits of `in`), their first cells and entry parameters; the
+// answers (H) to job.hits. kTiles: packets as Packet_Rays forms them (image
+// tiles where the job has them), else in job order. kMotion (a moving
+// scene): each ray also takes its time (Ray::time; the packet's,
+// RayPacketOf).
 template <int N, bool kFast, bool kMotion, bool kTiles, class Walk>
 CR_SIMD_INLINE void GridEntry_Packets(const KernelScene& sc, const GridHeader& g, const KernelJob& job, Walk&& walk)
 {
@@ -39,20 +40,18 @@ CR_SIMD_INLINE void GridEntry_Packets(const KernelScene& sc, const GridHeader& g
     unsigned in = 0;
     if (g.nRefs != 0u)
       in = GridPacket_Enter<N, kFast>(g, P, H, vbool<N>::FromBits((1u << count) - 1u), cellV, &tEnterV).Bits();
-    alignas(32) std::uint32_t cells[3][N];
-    alignas(32) float tEnter[N];
-    for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
-    tEnterV.Store(tEnter);
-    Ray rays[N];
-    Hit hits[N];
-    RayPacket_Extract<N>(P, H, rays);
-    for (int l = 0; l < N; ++l) {
-      if constexpr (kMotion) rays[l].time = Job_Time(job, idx[l < count ? l : 0]);
-      Hit_Init(&hits[l], &rays[l]);
+    if (in) {
+      alignas(32) std::uint32_t cells[3][N];
+      alignas(32) float tEnter[N];
+      for (int a = 0; a < 3; ++a) cellV[a].Store(cells[a]);
+      tEnterV.Store(tEnter);
+      Ray rays[N];
+      RayPacket_Extract<N>(P, H, rays);
+      if constexpr (kMotion)
+        for (int l = 0; l < N; ++l) rays[l].time = Job_Time(job, idx[l < count ? l : 0]);
+      walk(P, H, rays, in, cells, tEnter);
     }
-    walk(P, rays, hits, in, cells, tEnter);
-    for (int l = 0; l < count; ++l)
-      job.hits[idx[l]] = Hit_ToRecord(&hits[l], &pv, sc.primIds, job.occlusion, sc.unifiedHits);
+    Packet_StoreHits<N>(sc, pv, job, H, idx, count);
   }
 }
 
@@ -64,13 +63,17 @@ CR_SIMD_INLINE void GridSingle_Rays(const KernelScene& sc, const GridHeader& g, 
 {
   GridEntry_Packets<N, kFast, kMotion, false>(
       sc, g, job,
-      [&](const RayPacket<N>&, const Ray* rays, Hit* hits, unsigned in, const std::uint32_t (&cells)[3][N],
+      [&](const RayPacket<N>&, HitPacket<N>& H, const Ray* rays, unsigned in, const std::uint32_t (&cells)[3][N],
           const float* tEnter) {
+        HitLanes<N> hits(H);
         for (unsigned rest = in; rest; rest &= rest - 1u) {
           const int l = LowestBit(rest);
           const int first[3] = {int(cells[0][l]), int(cells[1][l]), int(cells[2][l])};
-          walk(rays[l], hits[l], first, tEnter[l]);
+          Hit hit = hits.Get(l);
+          walk(rays[l], hit, first, tEnter[l]);
+          hits.Set(l, hit);
         }
+        hits.To(H);
       });
 }
 

@@ -3,14 +3,18 @@
 // one, the lanes' states side by side (per lane: the grid walked and its
 // planes, cell, next crossings, cell index, entry parameter, ancestors and
 // mailbox). What every lane does at every cell runs on all lanes at once:
-// the cells' reference ranges are gathered together, and the step to the
-// next cell (the exit axis by the scalar tie rule, the end of the walk at
-// the closest hit so far, the crossing of the new exit plane recomputed
-// from its plane) is one vector pass with per-lane planes. What only some
-// lanes do at a cell runs lane by lane with the single walk's code: the
-// descent into a child grid, the jump over empty cells by their distance
-// (HGrid_Skip), the tests of a cell's references not in the lane's mailbox
-// (4 at a time, HGrid_TestCell), and the return to the parent grid.
+// the cells' reference ranges and child markers are gathered together; the
+// step to the next cell (the exit axis by the scalar tie rule, the end of
+// the walk at the closest hit so far, the crossing of the new exit plane
+// recomputed from its plane), the entry into a child grid's cell
+// (GridPacket_CellAt) and the jump over empty cells by their distance
+// (HGrid_SkipExit's box exit) are vector passes with per-lane planes.
+// Lanes that stand in one cell share a packet pass over its references
+// (each primitive on the lanes that do not have it in their mailboxes);
+// one or two lanes in a larger cell test it alone (HGrid_TestCell, 4 at a
+// time). Lane by lane: the choice to descend, the return to the parent
+// grid, and the packet's last lanes (finishLane: the single walk's loop).
+// The walk takes the packet's hits (HitPacket) and leaves its answers there.
 //
 // Per lane this is the single walk, step for step and bit for bit (the same
 // planes, crossings, cells, tests in the same order), so the hits and the
@@ -45,20 +49,14 @@ struct HGridLanes {
   alignas(32) float tNext[3][N];
   alignas(32) std::uint32_t idx[N];
   alignas(32) float tEnter[N], hitT[N];
-  struct Saved {
-    const GridHeader* g;
-    int cell[3];
-    float tNext[3];
-    std::uint32_t idx;
-  };
-  Saved stack[N][CR_HGRID_MAX_DEPTH];
+  HGridSaved stack[N][CR_HGRID_MAX_DEPTH];
   int sp[N];
   // The lanes' mailboxes, slot by slot (slot k of lane l: mailbox[k][l]).
   alignas(32) std::uint32_t mailbox[CR_HGRID_MAILBOX][N];
 };
 
 template <int N, unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& P, const Ray* rays, Hit* hits,
+CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H, const Ray* rays,
                                      unsigned live, const std::uint32_t (&cells)[3][N], const float* tEnter0,
                                      int anyHit, TraceStatsSum& st)
 {
@@ -83,7 +81,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
   // Lane l into child grid `child`: its grid and cell onto its stack (the
   // cell within the child is entered by the caller).
   const auto descend = [&](int l, const GridHeader* child) __attribute__((always_inline)) {
-    typename HGridLanes<N>::Saved& s = L.stack[l][L.sp[l]++];
+    HGridSaved& s = L.stack[l][L.sp[l]++];
     s.g = L.g[l];
     for (int a = 0; a < 3; ++a) {
       s.cell[a] = L.cell[a][l];
@@ -115,7 +113,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
   const auto ascend = [&](int l) {
     for (;;) {
       if (L.sp[l] == 0) return false;
-      const typename HGridLanes<N>::Saved& s = L.stack[l][--L.sp[l]];
+      const HGridSaved& s = L.stack[l][--L.sp[l]];
       setGrid(l, s.g);
       for (int a = 0; a < 3; ++a) {
         L.cell[a][l] = s.cell[a];
@@ -174,24 +172,7 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
     for (int a = 0; a < 3; ++a) L.cell[a][l] = int(cells[a][l]);
   }
   enterCells(live);
-  // The lanes' hits as a packet (the packet tests' form), their t also lane
-  // by lane (the scalar steps').
-  HitPacket<N> H;
-  {
-    alignas(32) float t[N], u[N], v[N];
-    alignas(32) std::uint32_t g[N];
-    for (int l = 0; l < N; ++l) {
-      t[l] = hits[l].t;
-      u[l] = hits[l].u;
-      v[l] = hits[l].v;
-      g[l] = hits[l].g;
-    }
-    H.t = vfloat<N>::Load(t);
-    H.u = vfloat<N>::Load(u);
-    H.v = vfloat<N>::Load(v);
-    H.g = vint<N>::Load(g);
-    H.t.Store(L.hitT);
-  }
+  H.t.Store(L.hitT);  // the lanes' hits' t also lane by lane (the scalar steps')
   unsigned prReady = 0;  // lanes whose prs[] is prepared
   const auto packRay = [&](int l) -> const PackRayOf<4, kHasMotion<kTypes>>& {
     if (!((prReady >> l) & 1u)) {
@@ -206,72 +187,25 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
   // walk's loop on the lane's state (for the last lanes of a packet, whose
   // vector passes would run mostly empty).
   const auto finishLane = [&](int l) {
-    const Ray& ray = rays[l];
-    Hit hit = HitPacket_Lane<N>(H, l);
-    const auto enterCell = [&](const int c[3]) __attribute__((always_inline)) {
-      const GridHeader& g = *L.g[l];
-      for (int a = 0; a < 3; ++a) {
-        L.cell[a][l] = c[a];
-        L.tNext[a][l] = PlaneT(GridPlane(g, a, step[a][l] > 0 ? c[a] + 1 : c[a]), ray.org[a], ray.inv[a]);
-      }
-      L.idx[l] = std::uint32_t(c[0]) + g.res[0] * (std::uint32_t(c[1]) + g.res[1] * std::uint32_t(c[2]));
-    };
-    for (;;) {
-      if constexpr (kStats) ++st.nTS;
-      const GridHeader& g = *L.g[l];
-      const std::uint32_t idx = L.idx[l];
-      std::uint32_t begin = refs[L.first[l] + idx];
-      const std::uint32_t end = refs[L.first[l] + idx + 1];
-      if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
-        const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
-        const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
-        if (reachPerT[l] * tExit <= child->margin) {
-          descend(l, child);
-          int c[3];
-          GridSingle_EnterAt(*child, ray, L.tEnter[l], c);
-          enterCell(c);
-          continue;
-        }
-        ++begin;
-      }
-      if constexpr (kStats) ++st.nLeaves;
-      bool leave = false;
-      if (begin == end) {
-        if constexpr (kStats) ++st.nEmptyLeaves;
-        const int d = int((refs[L.dist[l] + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
-        if (d >= CR_HGRID_SKIP_MIN) {
-          const int st3[3] = {step[0][l], step[1][l], step[2][l]};
-          const int cell[3] = {L.cell[0][l], L.cell[1][l], L.cell[2][l]};
-          const int res[3] = {L.res[0][l], L.res[1][l], L.res[2][l]};
-          int axis, last;
-          const float t = HGrid_SkipExit(g, ray, st3, cell, res, d, axis, last);
-          if (t > L.tEnter[l]) {
-            L.tEnter[l] = t;
-            if (hit.t <= t) break;
-            const int next = last + st3[axis];
-            if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
-              int c[3];
-              GridSingle_EnterAt(g, ray, t, c);
-              c[axis] = next;
-              enterCell(c);
-              continue;
-            }
-            leave = true;
-          }
-        }
-      } else {
-        if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N, packRay(l), hit, anyHit,
-                                                  st))
-          break;
-        L.hitT[l] = hit.t;
-      }
-      if (!leave) {
-        const int r = stepLane(l);
-        if (r == 0) break;
-        if (r == 1) continue;
-      }
-      if (!ascend(l)) break;
+    HGridWalkState w;
+    int st3[3];
+    w.g = L.g[l];
+    w.cellStart = refs + L.first[l];
+    for (int a = 0; a < 3; ++a) {
+      w.cell[a] = L.cell[a][l];
+      w.dIdx[a] = L.dIdx[a][l];
+      w.res[a] = L.res[a][l];
+      w.tNext[a] = L.tNext[a][l];
+      st3[a] = step[a][l];
     }
+    w.idx = L.idx[l];
+    w.tEnter = L.tEnter[l];
+    w.stack = L.stack[l];
+    w.sp = L.sp[l];
+    w.mailbox = &L.mailbox[0][l];
+    w.mailboxStride = N;
+    Hit hit = HitPacket_Lane<N>(H, l);
+    HGridWalk_Run<kTypes, kFast, kStats>(sc, rays[l], packRay(l), st3, reachPerT[l], w, hit, anyHit, st);
     HitPacket_SetLane<N>(H, l, hit);
   };
   vint<N> stepV[3];
@@ -477,7 +411,6 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       if (!ascend(l)) live &= ~(1u << l);
     }
   }
-  for (int l = 0; l < N; ++l) hits[l] = HitPacket_Lane<N>(H, l);
 }
 
 // Traces positions [job.begin, job.end) in packets of N.
@@ -487,9 +420,9 @@ void HGridPacket_TraceRange(const KernelScene& sc, const KernelJob& job)
   TraceStatsSum st;
   GridEntry_Packets<N, kFast, kHasMotion<kTypes>, true>(
       sc, *sc.hgridHeader, job,
-      [&](const RayPacket<N>& P, const Ray* rays, Hit* hits, unsigned in, const std::uint32_t (&cells)[3][N],
+      [&](const RayPacket<N>& P, HitPacket<N>& H, const Ray* rays, unsigned in, const std::uint32_t (&cells)[3][N],
           const float* tEnter) {
-        if (in) HGridPacket_Walk<N, kTypes, kFast, kStats>(sc, P, rays, hits, in, cells, tEnter, job.occlusion, st);
+        HGridPacket_Walk<N, kTypes, kFast, kStats>(sc, P, H, rays, in, cells, tEnter, job.occlusion, st);
       });
   if constexpr (kStats) AddJobStats(job.stats, st, job.end - job.begin);
 }

@@ -4,8 +4,8 @@
 // into a child grid from the parameter where it entered the child's cell
 // (GridSingle_EnterAt of simd/grid_walk.h), jumping over empty space by
 // the cells' distances (HGrid_Skip) and testing a cell's primitives not in
-// the ray's mailbox 4 at a time. The structure has no packet walk of its
-// own yet: its packet kernel is this one (kernels_hgrid.cpp).
+// the ray's mailbox 4 at a time. The packet walk (simd/hgrid_packet.h)
+// finishes its last lanes with this walk's loop (HGridWalk_Run).
 #pragma once
 
 #include <algorithm>
@@ -66,81 +66,91 @@ CR_SIMD_INLINE bool HGrid_TestCell(const KernelScene& sc, const std::uint32_t* r
   return false;
 }
 
-// The walk of one ray from cell `first` of the root grid, entered at
-// tEnter; HGrid_Trace step by step. Each level keeps the crossing parameter
-// of its next plane per axis and recomputes only the axis it stepped (as
-// GridSingle_Walk), and the stack keeps the ancestors' (bit for bit the
-// scalar walk's recomputed values: their planes have not changed).
-template <unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], float tEnter,
-                                     int anyHit, TraceStatsSum& st)
-{
-  PackRayOf<4, kHasMotion<kTypes>> pr;
-  PackRay_Init<4>(pr, ray);
-  if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
-  pr.anyHit = anyHit != 0;
-  const std::uint32_t* refs = sc.hgridRefs;
-  int step[3];
-  for (int a = 0; a < 3; ++a) step[a] = ray.inv[a] < 0.0f ? -1 : 1;
-  const float reachPerT =
-      CR_HGRID_RAY_ERR * std::max(std::fabs(ray.dir[0]), std::max(std::fabs(ray.dir[1]), std::fabs(ray.dir[2])));
-  // The grid walked, in locals: header, cell offsets, cell, next crossings,
-  // cell index, its change per step and the resolution; the ancestors' on
-  // the stack (what follows from the header is recomputed when popped).
-  const GridHeader* g = nullptr;
-  const std::uint32_t* cellStart = nullptr;
+// An ancestor grid on a walk's stack: the cell the walk goes on from (what
+// follows from the header is recomputed when popped).
+struct HGridSaved {
+  const GridHeader* g;
+  int cell[3];
+  float tNext[3];
+  std::uint32_t idx;
+};
+
+// One ray's walk state: the grid walked (header, cell offsets, resolution,
+// the cell index's change per step), the cell, the next crossing per axis,
+// the cell index, the parameter at which the ray entered the cell, the
+// ancestors' stack and the mailbox (slot k at mailbox[k * mailboxStride]).
+// The single walk keeps it in locals; the packet walk's lanes keep it in
+// arrays and a finishing lane runs on a copy (simd/hgrid_packet.h).
+struct HGridWalkState {
+  const GridHeader* g;
+  const std::uint32_t* cellStart;
   int cell[3], dIdx[3], res[3];
   float tNext[3];
-  std::uint32_t idx = 0;
-  struct Saved {
-    const GridHeader* g;
-    int cell[3];
-    float tNext[3];
-    std::uint32_t idx;
-  };
-  Saved stack[CR_HGRID_MAX_DEPTH];
-  int sp = 0;
-  std::uint32_t mailbox[CR_HGRID_MAILBOX];
-  for (std::uint32_t& m : mailbox) m = CR_NO_HIT;
-  const auto setGrid = [&](const GridHeader* ng) __attribute__((always_inline)) {
-    g = ng;
-    cellStart = refs + ng->first;
-    const int stride[3] = {1, int(ng->res[0]), int(ng->res[0] * ng->res[1])};
-    for (int a = 0; a < 3; ++a) {
-      res[a] = int(ng->res[a]);
-      dIdx[a] = step[a] * stride[a];
-    }
-  };
-  const auto enterCell = [&](const int c[3]) __attribute__((always_inline)) {
-    for (int a = 0; a < 3; ++a) {
-      cell[a] = c[a];
-      tNext[a] = PlaneT(GridPlane(*g, a, step[a] > 0 ? c[a] + 1 : c[a]), ray.org[a], ray.inv[a]);
-    }
-    idx = std::uint32_t(c[0]) + g->res[0] * (std::uint32_t(c[1]) + g->res[1] * std::uint32_t(c[2]));
-  };
-  setGrid(sc.hgridHeader);
-  enterCell(first);
+  std::uint32_t idx;
+  float tEnter;
+  HGridSaved* stack;
+  int sp;
+  std::uint32_t* mailbox;
+  int mailboxStride;
+};
+
+// The walk in grid ng (its header's fields; not the cell).
+CR_SIMD_INLINE void HGridWalk_SetGrid(HGridWalkState& w, const std::uint32_t* refs, const GridHeader* ng,
+                                      const int step[3])
+{
+  w.g = ng;
+  w.cellStart = refs + ng->first;
+  const int stride[3] = {1, int(ng->res[0]), int(ng->res[0] * ng->res[1])};
+  for (int a = 0; a < 3; ++a) {
+    w.res[a] = int(ng->res[a]);
+    w.dIdx[a] = step[a] * stride[a];
+  }
+}
+
+// The walk enters cell c of its grid: the crossings of its exit planes and
+// its index.
+CR_SIMD_INLINE void HGridWalk_EnterCell(HGridWalkState& w, const Ray& ray, const int step[3], const int c[3])
+{
+  for (int a = 0; a < 3; ++a) {
+    w.cell[a] = c[a];
+    w.tNext[a] = PlaneT(GridPlane(*w.g, a, step[a] > 0 ? c[a] + 1 : c[a]), ray.org[a], ray.inv[a]);
+  }
+  w.idx = std::uint32_t(c[0]) + w.g->res[0] * (std::uint32_t(c[1]) + w.g->res[1] * std::uint32_t(c[2]));
+}
+
+// HGrid_Trace step by step from the walk's cell to the walk's end, for the
+// ray (pr: its 4-wide form for the cells' tests; step: its cell steps;
+// reachPerT: CR_HGRID_RAY_ERR times its largest direction component). Each
+// level keeps the crossing parameter of its next plane per axis and
+// recomputes only the axis it stepped (as GridSingle_Walk), and the stack
+// keeps the ancestors' (bit for bit the scalar walk's recomputed values:
+// their planes have not changed).
+template <unsigned kTypes, bool kFast, bool kStats, class PR>
+CR_SIMD_INLINE void HGridWalk_Run(const KernelScene& sc, const Ray& ray, const PR& pr, const int step[3],
+                                  float reachPerT, HGridWalkState& w, Hit& hit, int anyHit, TraceStatsSum& st)
+{
+  const std::uint32_t* refs = sc.hgridRefs;
   for (;;) {
     if constexpr (kStats) ++st.nTS;
-    std::uint32_t begin = cellStart[idx];
-    const std::uint32_t end = cellStart[idx + 1];
+    std::uint32_t begin = w.cellStart[w.idx];
+    const std::uint32_t end = w.cellStart[w.idx + 1];
     if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
       const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
       // HGrid_Reach at the cell's exit (Grid_CellExit: the smallest of the
       // next crossings, as the scalar walk computes them).
-      const float tExit = std::min(tNext[0], std::min(tNext[1], tNext[2]));
+      const float tExit = std::min(w.tNext[0], std::min(w.tNext[1], w.tNext[2]));
       if (reachPerT * tExit <= child->margin) {
-        Saved& s = stack[sp++];
-        s.g = g;
+        HGridSaved& s = w.stack[w.sp++];
+        s.g = w.g;
         for (int a = 0; a < 3; ++a) {
-          s.cell[a] = cell[a];
-          s.tNext[a] = tNext[a];
+          s.cell[a] = w.cell[a];
+          s.tNext[a] = w.tNext[a];
         }
-        s.idx = idx;
-        setGrid(child);
+        s.idx = w.idx;
+        HGridWalk_SetGrid(w, refs, child, step);
         int c[3];
-        GridSingle_EnterAt(*g, ray, tEnter, c);
-        enterCell(c);
+        GridSingle_EnterAt(*w.g, ray, w.tEnter, c);
+        HGridWalk_EnterCell(w, ray, step, c);
         continue;
       }
       ++begin;  // finer than the ray's precision: the cell's own references
@@ -151,54 +161,86 @@ CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit&
     if (begin == end) {
       if constexpr (kStats) ++st.nEmptyLeaves;
       // HGrid_Distance and HGrid_Skip of kernels/hgrid.h.
-      const int d = int((cellStart[g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
+      const std::uint32_t idx = w.idx;
+      const int d = int((w.cellStart[w.g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
       if (d >= CR_HGRID_SKIP_MIN) {
         int axis, last;
-        const float t = HGrid_SkipExit(*g, ray, step, cell, res, d, axis, last);
-        if (t > tEnter) {
-          tEnter = t;
+        const float t = HGrid_SkipExit(*w.g, ray, step, w.cell, w.res, d, axis, last);
+        if (t > w.tEnter) {
+          w.tEnter = t;
           if (hit.t <= t) return;
           const int next = last + step[axis];
-          if (static_cast<unsigned>(next) < static_cast<unsigned>(res[axis])) {
+          if (static_cast<unsigned>(next) < static_cast<unsigned>(w.res[axis])) {
             int c[3];
-            GridSingle_EnterAt(*g, ray, t, c);
+            GridSingle_EnterAt(*w.g, ray, t, c);
             c[axis] = next;
-            enterCell(c);
+            HGridWalk_EnterCell(w, ray, step, c);
             continue;
           }
           leave = true;
         }
       }
     } else {
-      if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, mailbox, 1, pr, hit, anyHit, st)) return;
+      if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, w.mailbox, w.mailboxStride, pr, hit, anyHit,
+                                                st))
+        return;
     }
     // Exit face: the smallest crossing, x before y before z on ties (the
     // scalar loop's strict <), chosen without branches.
     for (;;) {
       if (!leave) {
-        const float t01 = tNext[1] < tNext[0] ? tNext[1] : tNext[0];
-        const int axis = tNext[2] < t01 ? 2 : (tNext[1] < tNext[0] ? 1 : 0);
-        tEnter = tNext[axis];
-        if (hit.t <= tEnter) return;
-        const int c = cell[axis] + step[axis];
-        if (static_cast<unsigned>(c) < static_cast<unsigned>(res[axis])) {
-          cell[axis] = c;
-          idx += static_cast<std::uint32_t>(dIdx[axis]);
-          tNext[axis] = PlaneT(GridPlane(*g, axis, step[axis] > 0 ? c + 1 : c), ray.org[axis], ray.inv[axis]);
+        const float t01 = w.tNext[1] < w.tNext[0] ? w.tNext[1] : w.tNext[0];
+        const int axis = w.tNext[2] < t01 ? 2 : (w.tNext[1] < w.tNext[0] ? 1 : 0);
+        w.tEnter = w.tNext[axis];
+        if (hit.t <= w.tEnter) return;
+        const int c = w.cell[axis] + step[axis];
+        if (static_cast<unsigned>(c) < static_cast<unsigned>(w.res[axis])) {
+          w.cell[axis] = c;
+          w.idx += static_cast<std::uint32_t>(w.dIdx[axis]);
+          w.tNext[axis] =
+              PlaneT(GridPlane(*w.g, axis, step[axis] > 0 ? c + 1 : c), ray.org[axis], ray.inv[axis]);
           break;
         }
       }
       leave = false;
-      if (sp == 0) return;
-      const Saved& s = stack[--sp];
-      setGrid(s.g);
+      if (w.sp == 0) return;
+      const HGridSaved& s = w.stack[--w.sp];
+      HGridWalk_SetGrid(w, refs, s.g, step);
       for (int a = 0; a < 3; ++a) {
-        cell[a] = s.cell[a];
-        tNext[a] = s.tNext[a];
+        w.cell[a] = s.cell[a];
+        w.tNext[a] = s.tNext[a];
       }
-      idx = s.idx;
+      w.idx = s.idx;
     }
   }
+}
+
+// The walk of one ray from cell `first` of the root grid, entered at
+// tEnter (HGridWalk_Run, its state in locals).
+template <unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void HGridSingle_Walk(const KernelScene& sc, const Ray& ray, Hit& hit, const int first[3], float tEnter,
+                                     int anyHit, TraceStatsSum& st)
+{
+  PackRayOf<4, kHasMotion<kTypes>> pr;
+  PackRay_Init<4>(pr, ray);
+  if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
+  pr.anyHit = anyHit != 0;
+  int step[3];
+  for (int a = 0; a < 3; ++a) step[a] = ray.inv[a] < 0.0f ? -1 : 1;
+  const float reachPerT =
+      CR_HGRID_RAY_ERR * std::max(std::fabs(ray.dir[0]), std::max(std::fabs(ray.dir[1]), std::fabs(ray.dir[2])));
+  HGridSaved stack[CR_HGRID_MAX_DEPTH];
+  std::uint32_t mailbox[CR_HGRID_MAILBOX];
+  for (std::uint32_t& m : mailbox) m = CR_NO_HIT;
+  HGridWalkState w;
+  w.stack = stack;
+  w.sp = 0;
+  w.mailbox = mailbox;
+  w.mailboxStride = 1;
+  w.tEnter = tEnter;
+  HGridWalk_SetGrid(w, sc.hgridRefs, sc.hgridHeader, step);
+  HGridWalk_EnterCell(w, ray, step, first);
+  HGridWalk_Run<kTypes, kFast, kStats>(sc, ray, pr, step, reachPerT, w, hit, anyHit, st);
 }
 
 // Traces positions [job.begin, job.end) one ray at a time (the rays'
