@@ -16,6 +16,14 @@
  *  - hits are kept across leaves: a primitive stored in several leaves may be
  *    hit beyond the current leaf's exit; the search stops only when the
  *    closest hit so far lies within the current cell (t <= its exit).
+ * With CR_OCTREE_MAILBOX_ON in the header's flags (--octree-mailbox on) the
+ * walk keeps a per-ray mailbox, as the hierarchical grid's (kernels/hgrid.h;
+ * Amanatides & Woo 1987): a direct-mapped table of CR_OCTREE_MAILBOX entries
+ * holds the last primitive tested in each slot, and a reference found there
+ * is skipped. Exact: the same ray against the same primitive gives the same
+ * answer, which the hit already holds (a hit beyond an earlier leaf is
+ * kept), so the answers are the classic walk's with fewer tests (nIT). Off
+ * by default: the classic octree is the baseline the study measures.
  * Layout: OctreeHeader and OctreeNode in types.h. Iterative with an explicit
  * stack (OpenCL has no recursion). */
 #ifndef CELLRAY_KERNELS_OCTREE_H
@@ -37,6 +45,20 @@
  * about as small as the float spacing of the coordinates: deeper cells could
  * not separate anything. */
 #define CR_OCTREE_MAX_DEPTH 20
+
+/* Whether the walk keeps its mailbox: the header's flag in C++ (the scalar
+ * backend); in OpenCL fixed when the program is built
+ * (CR_OCTREE_MAILBOX_BUILD, host/cl/cl_options.cpp, 0 where unset), so the
+ * classic walk's programs hold no mailbox (no private array to keep in
+ * registers or scratch). */
+#if defined(CR_OPENCL)
+#ifndef CR_OCTREE_MAILBOX_BUILD
+#define CR_OCTREE_MAILBOX_BUILD 0
+#endif
+#define CR_OCTREE_USE_MAILBOX(hdr) CR_OCTREE_MAILBOX_BUILD
+#else
+#define CR_OCTREE_USE_MAILBOX(hdr) (((hdr)->flags & CR_OCTREE_MAILBOX_ON) != 0u)
+#endif
 
 /* Plane i (0 <= i <= 2^level) of `level` on `axis`:
  * rootMin + i * (rootSize * 2^-level). rootSize * 2^-level is exact, and
@@ -76,14 +98,20 @@ CR_FUNC uint Octree_FirstChild(const real tm[3], real tStart)
  * (anyHit), or a closest hit so far that lies within the leaf (t <= tExit).
  * A hit beyond tExit is kept, but a nearer one may lie in a later cell. */
 CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray,
-                        Hit* hit, int anyHit, real tExit, TraceStats* st)
+                        Hit* hit, int anyHit, real tExit, uint* mailbox, int useMailbox, TraceStats* st)
 {
   CR_COUNT(st, nLeaves);
   if (n->count == 0u) CR_COUNT(st, nEmptyLeaves);
   const uint end = n->first + n->count;
   for (uint i = n->first; i < end; ++i) {
+    const uint prim = refs[i];
+    if (useMailbox) {
+      const uint slot = prim & (CR_OCTREE_MAILBOX - 1u);
+      if (mailbox[slot] == prim) continue; /* tested already: same ray, same answer */
+      mailbox[slot] = prim;
+    }
     CR_COUNT(st, nIT);
-    if (Prim_Intersect(pv, refs[i], ray, hit) && anyHit) return 1;
+    if (Prim_Intersect(pv, prim, ray, hit) && anyHit) return 1;
   }
   return hit->t <= tExit ? 1 : 0;
 }
@@ -113,8 +141,11 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   const real rootExit = fmin(fmin(t1[0], t1[1]), t1[2]);
   if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
   CR_COUNT(st, nTS);
+  const int useMailbox = CR_OCTREE_USE_MAILBOX(hdr);
+  uint mailbox[CR_OCTREE_MAILBOX];
+  CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
   if (nodes[0].childMask == 0u) {
-    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rootExit, st);
+    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rootExit, mailbox, useMailbox, st);
     return;
   }
   uint stackNode[CR_OCTREE_MAX_DEPTH];
@@ -140,7 +171,7 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
       } else {
         const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
         if (nodes[ci].childMask == 0u) {
-          if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, cx, st)) return;
+          if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, cx, mailbox, useMailbox, st)) return;
         } else {
           /* Descend. The child's near and far planes are planes of the
            * parent (same values, bit for bit); only its mid planes are new. */

@@ -23,7 +23,9 @@
  * order; the order only decides how soon hit t shrinks. An any-hit query
  * may report a different occluder than Octree_Trace. Counters (CR_STATS):
  * nTS nodes whose cell the lane entered, nLeaves leaves among them, nIT
- * primitive tests; empty octants are not visited (nEmptyLeaves stays 0). */
+ * primitive tests; empty octants are not visited (nEmptyLeaves stays 0).
+ * With the mailbox (--octree-mailbox on) each lane skips a reference it has
+ * tested in an earlier leaf (exact, as in Octree_Trace). */
 #ifndef CELLRAY_KERNELS_OCTREE_PACKET_CL
 #define CELLRAY_KERNELS_OCTREE_PACKET_CL
 #include "octree.h"
@@ -86,6 +88,12 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
                                 __local uint* sState, __local real* sRay, __local uint* sAxes, __local real* sHit,
                                 __local uint* sHitG)
 {
+#if CR_OCTREE_MAILBOX_BUILD
+  /* The lane's mailbox (kernels/octree.h): a reference it has tested in an
+   * earlier leaf is skipped. */
+  uint mailbox[CR_OCTREE_MAILBOX];
+  CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
+#endif
   if (lid == 0) {
     CR_UNROLL for (int w = 0; w < CR_OCTREE_PACKET_ENTRY; ++w) sStack[w] = 0u; /* the root */
     OctreePacket_Pop(hdr, nodes, sStack, sState, sPlane, 1u);
@@ -178,9 +186,18 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
     /* Step 3, once per reference of the leaf (one barrier each). */
     for (uint k = 0; k < sState[8]; ++k) {
       {
-        const int took = Packet_TestStep(pv, refs[sState[7] + k], in, sRay, sAxes, sHit, sHitG, lid, nLanes);
+        const uint prim = refs[sState[7] + k];
+        int test = in;
+#if CR_OCTREE_MAILBOX_BUILD
+        if (in) {
+          const uint slot = prim & (CR_OCTREE_MAILBOX - 1u);
+          test = mailbox[slot] != prim ? 1 : 0;
+          mailbox[slot] = prim;
+        }
+#endif
+        const int took = Packet_TestStep(pv, prim, test, sRay, sAxes, sHit, sHitG, lid, nLanes);
 #ifdef CR_STATS
-        st->nIT += (uint)in;
+        st->nIT += (uint)test;
 #endif
         live = live & !(took & anyHit);
         in = in & live;

@@ -304,15 +304,20 @@ typedef struct {
 } OctreeNode;
 
 /* Octree header, 32 bytes: a cube [rootMin, rootMin + rootSize]^3. Planes are
- * rootMin + i * (rootSize * 2^-level), computed only by Octree_Plane(). */
+ * rootMin + i * (rootSize * 2^-level), computed only by Octree_Plane().
+ * flags: CR_OCTREE_MAILBOX_ON (--octree-mailbox on: the walks skip a
+ * primitive the ray has tested in an earlier leaf, kernels/octree.h). */
 typedef struct {
   float rootMin[3];
   float rootSize;
   uint nNodes;
   uint nRefs;
   uint maxDepth;
-  uint pad;
+  uint flags;
 } OctreeHeader;
+#define CR_OCTREE_MAILBOX_ON 1u
+/* Entries of the octree walk's mailbox when it is on (a power of two). */
+#define CR_OCTREE_MAILBOX 8
 
 CR_NS_END
 

@@ -11,7 +11,7 @@
 // (HGrid_SkipExit's box exit) are vector passes with per-lane planes.
 // Lanes that stand in one cell share a packet pass over its references
 // (each primitive on the lanes that do not have it in their mailboxes);
-// one or two lanes in a larger cell test it alone (HGrid_TestCell, 4 at a
+// one or two lanes in a larger cell test it alone (MailboxRefs_Intersect, 4 at a
 // time). Lane by lane: the choice to descend, the return to the parent
 // grid, and the packet's last lanes (finishLane: the single walk's loop).
 // The walk takes the packet's hits (HitPacket) and leaves its answers there.
@@ -273,34 +273,8 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
         vbool<N> m = vbool<N>::FromBits(tests) & (bv == vint<N>(int(begins[l0])));
         pending &= ~m.Bits();
         if constexpr (kStats) st.nLeaves += PopCount(m.Bits());
-        const std::uint32_t begin = begins[l0], end = ends[l0];
-        if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m)) {
-          for (unsigned r = m.Bits(); r; r &= r - 1u) {
-            const int l = LowestBit(r);
-            Hit hit = HitPacket_Lane<N>(H, l);
-            const bool answered = HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, &L.mailbox[0][l], N,
-                                                                        packRay(l), hit, anyHit, st);
-            HitPacket_SetLane<N>(H, l, hit);
-            if (answered) done |= 1u << l;
-          }
-          continue;
-        }
-        for (std::uint32_t i = begin; i < end; ++i) {
-          const std::uint32_t prim = refs[i];
-          std::uint32_t* row = L.mailbox[prim & (CR_HGRID_MAILBOX - 1u)];
-          const vint<N> slot = vint<N>::Load(row);
-          const vint<N> pv(static_cast<int>(prim));
-          const vbool<N> fresh = AndNot(m, slot == pv);
-          Select(m, pv, slot).Store(row);
-          if (None(fresh)) continue;
-          if constexpr (kStats) st.nIT += PopCount(fresh.Bits());
-          const vbool<N> changed = PacketPrim_Intersect<N, kTypes, kFast>(sc, prim, P, H, fresh);
-          if (anyHit && Any(changed)) {
-            done |= changed.Bits();
-            m = AndNot(m, changed);
-            if (None(m)) break;
-          }
-        }
+        MailboxPacketRefs_Intersect<N, CR_HGRID_MAILBOX, kTypes, kFast, kStats>(
+            sc, refs, begins[l0], ends[l0], L.mailbox, P, H, m, anyHit, done, st, packRay);
       }
       if (done) {
         live &= ~done;

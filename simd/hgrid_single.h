@@ -40,32 +40,6 @@ CR_SIMD_INLINE float HGrid_SkipExit(const GridHeader& g, const Ray& ray, const i
   return t;
 }
 
-// The references refs[begin, end) of a cell not in the ray's mailbox
-// (kernels/hgrid.h; slot k at mailbox[k * stride]), in order, a chunk at a
-// time, then tested 4 at a time: the scalar loop's tests. True when an
-// any-hit query is answered.
-template <unsigned kTypes, bool kFast, bool kStats, class PR>
-CR_SIMD_INLINE bool HGrid_TestCell(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
-                                   std::uint32_t end, std::uint32_t* mailbox, int stride, const PR& pr, Hit& hit,
-                                   int anyHit, TraceStatsSum& st)
-{
-  constexpr std::uint32_t kChunk = 32;
-  alignas(16) std::uint32_t fresh[kChunk];
-  std::uint32_t i = begin;
-  while (i < end) {
-    std::uint32_t n = 0;
-    for (; i < end && n < kChunk; ++i) {
-      const std::uint32_t prim = refs[i];
-      std::uint32_t& slot = mailbox[(prim & (CR_HGRID_MAILBOX - 1u)) * std::uint32_t(stride)];
-      if (slot == prim) continue;
-      slot = prim;
-      fresh[n++] = prim;
-    }
-    if (n && RayRefs_Intersect<kTypes, kFast, kStats>(sc, fresh, 0, n, pr, hit, anyHit, st) && anyHit) return true;
-  }
-  return false;
-}
-
 // An ancestor grid on a walk's stack: the cell the walk goes on from (what
 // follows from the header is recomputed when popped).
 struct HGridSaved {
@@ -181,8 +155,8 @@ CR_SIMD_INLINE void HGridWalk_Run(const KernelScene& sc, const Ray& ray, const P
         }
       }
     } else {
-      if (HGrid_TestCell<kTypes, kFast, kStats>(sc, refs, begin, end, w.mailbox, w.mailboxStride, pr, hit, anyHit,
-                                                st))
+      if (MailboxRefs_Intersect<CR_HGRID_MAILBOX, kTypes, kFast, kStats>(sc, refs, begin, end, w.mailbox,
+                                                                         w.mailboxStride, pr, hit, anyHit, st))
         return;
     }
     // Exit face: the smallest crossing, x before y before z on ties (the

@@ -17,7 +17,8 @@
 //    leaf or empty octant whose exit lies at or beyond the hit, or at its
 //    first hit (occlusion).
 // So hits, the order of primitive tests and the statistics (counted per
-// lane) are the scalar backend's.
+// lane) are the scalar backend's; with the octree's mailbox (--octree-mailbox
+// on) each lane keeps its own, as Octree_Trace does.
 #pragma once
 
 #include "simd/bvh_packet.h"
@@ -85,24 +86,36 @@ CR_SIMD_INLINE void OctreeFrame_Advance(OctreeFrame<N>& F, unsigned lanes)
 // Octree_Leaf for the lanes of `lanes`: tests the references, and returns
 // the lanes whose query is answered (an occluder, or a closest hit so far at
 // or before the leaf's exit cx).
+// With `mailbox` (the octree has one: --octree-mailbox on), each lane
+// skips the references in its own (slot k of lane l at mailbox[k][l]).
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNode& n, const RayPacket<N>& P,
-                                          HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit, TraceStatsSum& st)
+                                          HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit,
+                                          std::uint32_t (*mailbox)[N], TraceStatsSum& st)
 {
   if constexpr (kStats) {
     st.nLeaves += PopCount(lanes);
     if (n.count == 0u) st.nEmptyLeaves += PopCount(lanes);
   }
   unsigned done = 0;
-  if (n.count) CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, P, H,
-                                                            vbool<N>::FromBits(lanes), anyHit, done, st);
+  if (n.count) {
+    const std::uint32_t begin = n.first, end = n.first + n.count;
+    if (mailbox)
+      MailboxPacketRefs_Intersect<N, CR_OCTREE_MAILBOX, kTypes, kFast, kStats>(
+          sc, sc.octreeRefs, begin, end, mailbox, P, H, vbool<N>::FromBits(lanes), anyHit, done, st,
+          [&](int l) { return PackRay_OfLane<N, kHasMotion<kTypes>>(P, l, anyHit); });
+    else
+      CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end, P, H, vbool<N>::FromBits(lanes),
+                                                   anyHit, done, st);
+  }
   return done | (lanes & (H.t <= cx).Bits());
 }
 
 // The lanes of `lanes`, whose directions all have the sign bits signMask.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
-                                            unsigned lanes, unsigned signMask, int anyHit, TraceStatsSum& st)
+                                            unsigned lanes, unsigned signMask, int anyHit,
+                                            std::uint32_t (*mailbox)[N], TraceStatsSum& st)
 {
   const OctreeHeader& hdr = *sc.octreeHeader;
   const OctreeNode* nodes = sc.octreeNodes;
@@ -125,7 +138,7 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
   if (!live) return;
   if constexpr (kStats) st.nTS += PopCount(live);
   if (nodes[0].childMask == 0u) {
-    OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[0], P, H, live, rootExit, anyHit, st);
+    OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[0], P, H, live, rootExit, anyHit, mailbox, st);
     return;
   }
   F->cur = OctreeFirstChildN<N>(F->tm, FMax(rootEnter, P.tmin));
@@ -173,7 +186,7 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
       } else {
         const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
         if (nodes[ci].childMask == 0u) {
-          live &= ~OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[ci], P, H, vis, cx, anyHit, st);
+          live &= ~OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[ci], P, H, vis, cx, anyHit, mailbox, st);
         } else {
           // Descend with the lanes that enter; the others move on first.
           OctreeFrame_Advance<N>(*F, here & ~vis);
@@ -213,13 +226,20 @@ CR_SIMD_INLINE void OctreePacket_Trace(const KernelScene& sc, const RayPacket<N>
                                        int anyHit, TraceStatsSum& st)
 {
   const unsigned neg[3] = {P.invNeg[0].Bits(), P.invNeg[1].Bits(), P.invNeg[2].Bits()};
+  // The lanes' mailboxes (--octree-mailbox on; kernels/octree.h).
+  alignas(32) std::uint32_t mailboxes[CR_OCTREE_MAILBOX][N];
+  std::uint32_t(*mailbox)[N] = nullptr;
+  if (sc.octreeHeader->flags & CR_OCTREE_MAILBOX_ON) {
+    for (auto& row : mailboxes) vint<N>(static_cast<int>(CR_NO_HIT)).Store(row);
+    mailbox = mailboxes;
+  }
   for (unsigned rest = active.Bits(); rest;) {
     const int l = LowestBit(rest);
     const unsigned signMask = ((neg[0] >> l) & 1u) | (((neg[1] >> l) & 1u) << 1) | (((neg[2] >> l) & 1u) << 2);
     unsigned cls = rest;
     for (int a = 0; a < 3; ++a) cls &= ((signMask >> a) & 1u) ? neg[a] : ~neg[a];
     rest &= ~cls;
-    OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, st);
+    OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
   }
 }
 

@@ -2,7 +2,8 @@
 // kernels/octree.h step by step (the same planes, parameters, child order and
 // stopping rules), with SIMD inside the ray's work: rays are prepared N at a
 // time (RayPacket_Init), and a leaf's primitives are tested 4 at a time,
-// gathered from the scene arrays (simd/prim_range.h; no extra memory).
+// gathered from the scene arrays (simd/prim_range.h; no extra memory), those
+// in the ray's mailbox skipped where the octree has one (--octree-mailbox).
 // The stack keeps each ancestor's parameters instead of recomputing them from
 // the planes on the way back up: they are the same values, bit for bit.
 #pragma once
@@ -55,14 +56,22 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
   PackRay_Init<4>(pr, ray);
   if constexpr (kHasMotion<kTypes>) pr.time = ray.time;
   pr.anyHit = anyHit != 0;
+  // The mailbox (--octree-mailbox on; kernels/octree.h).
+  const bool useMailbox = (hdr.flags & CR_OCTREE_MAILBOX_ON) != 0u;
+  std::uint32_t mailbox[CR_OCTREE_MAILBOX];
+  if (useMailbox)
+    for (std::uint32_t& k : mailbox) k = CR_NO_HIT;
   // Octree_Leaf: true when the query is answered.
   auto leaf = [&](const OctreeNode& n, float tExit) {
     if constexpr (kStats) {
       ++st.nLeaves;
       if (n.count == 0u) ++st.nEmptyLeaves;
     }
-    if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.octreeRefs, n.first, n.first + n.count, pr, hit, anyHit, st) &&
-        anyHit)
+    const std::uint32_t begin = n.first, end = n.first + n.count;
+    if (useMailbox ? MailboxRefs_Intersect<CR_OCTREE_MAILBOX, kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end,
+                                                                                     mailbox, 1, pr, hit, anyHit, st)
+                   : RayRefs_Intersect<kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end, pr, hit, anyHit, st) &&
+                         anyHit)
       return true;
     return hit.t <= tExit;
   };

@@ -161,6 +161,26 @@ CR_SIMD_INLINE bool RayRefs_Intersect(const KernelScene& sc, const std::uint32_t
   return changed;
 }
 
+// Lane l of a packet as the single-ray form's 4-wide ray (PackRay_Init's
+// values, from the packet's own).
+template <int N, bool kMotion>
+CR_SIMD_INLINE PackRayOf<4, kMotion> PackRay_OfLane(const RayPacket<N>& P, int l, int anyHit)
+{
+  PackRayOf<4, kMotion> pr;
+  for (int a = 0; a < 3; ++a) {
+    pr.org[a] = vfloat<4>(P.org[a][l]);
+    pr.dir[a] = vfloat<4>(P.dir[a][l]);
+    pr.orgK[a] = vfloat<4>(P.orgK[a][l]);
+    pr.s[a] = vfloat<4>(P.s[a][l]);
+    pr.k[a] = static_cast<int>(P.k[a][l]);
+  }
+  pr.tmin = vfloat<4>(P.tmin[l]);
+  pr.dd = vfloat<4>(P.dd[l]);
+  pr.anyHit = anyHit != 0;
+  if constexpr (kMotion) pr.time = RayPacket_Time<N>(P)[l];
+  return pr;
+}
+
 // refs[begin, end) against the lanes of m one lane at a time, each with the
 // single-ray form (RayRefs_Intersect, 4 primitives at once): for a cell that
 // few lanes of a packet stand in, this keeps the vector lanes busy where a
@@ -173,18 +193,7 @@ CR_SIMD_INLINE void LaneRefs_Intersect(const KernelScene& sc, const std::uint32_
 {
   for (unsigned bits = m.Bits(); bits; bits &= bits - 1u) {
     const int l = LowestBit(bits);
-    PackRayOf<4, kHasMotion<kTypes>> pr;
-    for (int a = 0; a < 3; ++a) {
-      pr.org[a] = vfloat<4>(P.org[a][l]);
-      pr.dir[a] = vfloat<4>(P.dir[a][l]);
-      pr.orgK[a] = vfloat<4>(P.orgK[a][l]);
-      pr.s[a] = vfloat<4>(P.s[a][l]);
-      pr.k[a] = static_cast<int>(P.k[a][l]);
-    }
-    pr.tmin = vfloat<4>(P.tmin[l]);
-    pr.dd = vfloat<4>(P.dd[l]);
-    pr.anyHit = anyHit != 0;
-    if constexpr (kHasMotion<kTypes>) pr.time = RayPacket_Time<N>(P)[l];
+    const PackRayOf<4, kHasMotion<kTypes>> pr = PackRay_OfLane<N, kHasMotion<kTypes>>(P, l, anyHit);
     Hit hit = HitPacket_Lane<N>(H, l);
     if (RayRefs_Intersect<kTypes, kFast, kStats>(sc, refs, begin, end, pr, hit, anyHit, st)) {
       HitPacket_SetLane<N>(H, l, hit);
@@ -215,6 +224,74 @@ CR_SIMD_INLINE void CellRefs_Intersect(const KernelScene& sc, const std::uint32_
     LaneRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
   else
     PacketRefs_Intersect<N, kTypes, kFast, kStats>(sc, refs, begin, end, P, H, m, anyHit, done, st);
+}
+
+// The references refs[begin, end) of a cell or leaf that are not in the
+// ray's mailbox (a direct-mapped table of kSlots entries, slot k at
+// mailbox[k * stride], updated here; kernels/hgrid.h, kernels/octree.h), in
+// order, a chunk at a time, then tested 4 at a time: the scalar loop's
+// tests. True when an any-hit query is answered.
+template <int kSlots, unsigned kTypes, bool kFast, bool kStats, class PR>
+CR_SIMD_INLINE bool MailboxRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs, std::uint32_t begin,
+                                          std::uint32_t end, std::uint32_t* mailbox, int stride, const PR& pr,
+                                          Hit& hit, int anyHit, TraceStatsSum& st)
+{
+  constexpr std::uint32_t kChunk = 32;
+  alignas(16) std::uint32_t fresh[kChunk];
+  std::uint32_t i = begin;
+  while (i < end) {
+    std::uint32_t n = 0;
+    for (; i < end && n < kChunk; ++i) {
+      const std::uint32_t prim = refs[i];
+      std::uint32_t& slot = mailbox[(prim & std::uint32_t(kSlots - 1)) * std::uint32_t(stride)];
+      if (slot == prim) continue;
+      slot = prim;
+      fresh[n++] = prim;
+    }
+    if (n && RayRefs_Intersect<kTypes, kFast, kStats>(sc, fresh, 0, n, pr, hit, anyHit, st) && anyHit) return true;
+  }
+  return false;
+}
+
+// The same for the lanes of m of a packet, each with its own mailbox (slot
+// k of lane l at mailbox[k][l]): one packet pass, each primitive against
+// the lanes that do not have it in their mailboxes (one vector compare per
+// primitive); lane by lane (MailboxRefs_Intersect on laneRay(l), the lane's
+// 4-wide ray) where CellRefs_ByLane prefers it. Occlusion: a lane with an
+// occluder joins `done`. Per lane the scalar loop's tests and answer.
+template <int N, int kSlots, unsigned kTypes, bool kFast, bool kStats, class LaneRay>
+CR_SIMD_INLINE void MailboxPacketRefs_Intersect(const KernelScene& sc, const std::uint32_t* refs,
+                                                std::uint32_t begin, std::uint32_t end, std::uint32_t (*mailbox)[N],
+                                                const RayPacket<N>& P, HitPacket<N>& H, vbool<N> m, int anyHit,
+                                                unsigned& done, TraceStatsSum& st, LaneRay&& laneRay)
+{
+  if (CellRefs_ByLane<N, kTypes>(sc, begin, end, m)) {
+    for (unsigned r = m.Bits(); r; r &= r - 1u) {
+      const int l = LowestBit(r);
+      Hit hit = HitPacket_Lane<N>(H, l);
+      const bool answered = MailboxRefs_Intersect<kSlots, kTypes, kFast, kStats>(sc, refs, begin, end, &mailbox[0][l],
+                                                                                 N, laneRay(l), hit, anyHit, st);
+      HitPacket_SetLane<N>(H, l, hit);
+      if (answered) done |= 1u << l;
+    }
+    return;
+  }
+  for (std::uint32_t i = begin; i < end; ++i) {
+    const std::uint32_t prim = refs[i];
+    std::uint32_t* row = mailbox[prim & std::uint32_t(kSlots - 1)];
+    const vint<N> slot = vint<N>::Load(row);
+    const vint<N> pv(static_cast<int>(prim));
+    const vbool<N> fresh = AndNot(m, slot == pv);
+    Select(m, pv, slot).Store(row);
+    if (None(fresh)) continue;
+    if constexpr (kStats) st.nIT += PopCount(fresh.Bits());
+    const vbool<N> changed = PacketPrim_Intersect<N, kTypes, kFast>(sc, prim, P, H, fresh);
+    if (anyHit && Any(changed)) {
+      done |= changed.Bits();
+      m = AndNot(m, changed);
+      if (None(m)) break;
+    }
+  }
 }
 
 }  // namespace cr::simd::CR_SIMD_NS

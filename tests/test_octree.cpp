@@ -14,6 +14,7 @@
 #include "host/accel/accel.h"
 #include "host/core/error.h"
 #include "host/scene/generate.h"
+#include "host/trace/tracer.h"
 #include "tests/test_util.h"
 
 using namespace cr;
@@ -454,5 +455,72 @@ TEST_CASE("octree: random rays snapped to cell planes, with +-0 direction compon
              r.firstWrong.empty() ? std::string() : " (first " + std::to_string(r.firstWrong[0]) + ")");
         CHECK(r.wrong == 0);
       }
+  }
+}
+
+TEST_CASE("octree: the mailbox (--octree-mailbox on) gives the classic walk's answers with fewer tests, per ray as on scalar")
+{
+  // The teapot in a stadium: the ground and stands lie in many leaves, so
+  // a ray can meet a primitive again. Every CPU path, and OpenCL (per ray
+  // and packet) where a device is present.
+  const Scene scene = GenerateStadium(3);
+  AccelInfo info;
+  AccelParams on;
+  on.octreeMailbox = "on";
+  const OctreeData tree = BuildOctree(scene, on, info);
+  CHECK(tree.header.flags == CR_OCTREE_MAILBOX_ON);
+  CHECK(info.params.find("mailbox=on") != std::string::npos);
+  CHECK(BuildOctree(scene, AccelParams{}, info).header.flags == 0u);
+  AccelParams bad;
+  bad.octreeMailbox = "yes";
+  CHECK_THROWS_AS(BuildOctree(scene, bad, info), InputError);
+
+  struct Path {
+    const char* name;
+    Backend backend;
+    const char* variant;
+    bool statsAsScalar;  // per-ray counts equal the scalar walk's (the OpenCL packet walk counts its own way)
+  };
+  std::vector<Path> paths = {{"scalar", Backend::Scalar, "", true},
+                             {"simd packet", Backend::Simd, "packet", true},
+                             {"simd single", Backend::Simd, "single", true}};
+  const auto clCache = test::OpenCLTestCacheDir();
+  if (test::HaveOpenCLDevice()) {
+    paths.push_back({"opencl ray", Backend::OpenCL, "ray", true});
+    paths.push_back({"opencl packet", Backend::OpenCL, "packet", false});
+  }
+  for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
+    const auto rays = test::MakeRays(scene, kind, 48);
+    for (bool occlusion : {false, true}) {
+      TraceStatsSum scalarOn;
+      for (const Path& p : paths) {
+        CAPTURE(p.name);
+        CAPTURE(occlusion);
+        std::vector<HitRecord> hits[2];
+        TraceStatsSum st[2];
+        for (int mb = 0; mb < 2; ++mb) {
+          TraceConfig cfg;
+          cfg.backend = p.backend;
+          cfg.variant = p.variant;
+          cfg.accel = AccelKind::Octree;
+          cfg.params.octreeMailbox = mb ? "on" : "off";
+          cfg.stats = true;
+          CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits[mb], occlusion, &st[mb]);
+          CHECK(ref::CheckHits(test::CachedReference(scene), rays, hits[mb], occlusion, Tracer::NoTimes()).wrong == 0);
+        }
+        // Closest hits: the same answers bit for bit. Any hit: hit or miss
+        // the same (the occluder reported may differ on the packet walk).
+        CHECK(test::CountDiffering(hits[0], hits[1], occlusion) == 0);
+        CHECK(st[0].nTS == st[1].nTS);
+        MESSAGE(std::string(p.name), (occlusion ? " any hit" : " closest"), ": tests per ray, mailbox off ",
+                double(st[0].nIT) / double(rays.size()), ", on ", double(st[1].nIT) / double(rays.size()));
+        CHECK(st[1].nIT < st[0].nIT);
+        if (p.backend == Backend::Scalar) scalarOn = st[1];
+        if (p.statsAsScalar) {
+          CHECK(st[1].nIT == scalarOn.nIT);
+          CHECK(st[1].nLeaves == scalarOn.nLeaves);
+        }
+      }
+    }
   }
 }

@@ -42,6 +42,9 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
     "Octree subdivision: leaf (more than --octree-leaf references split; by default down to depth 10 and " \
     "on to 20 where the surface area heuristic finds it pays; --octree-depth D: down to D) or sah (the " \
     "heuristic everywhere)")                                                                    \
+  X(octreeMailbox, std::string, "--octree-mailbox",                                              \
+    "Octree walk: off (the default: the classic walk tests a primitive in every leaf it meets) or on (a "  \
+    "per-ray mailbox skips a primitive already tested in an earlier leaf; same answers, fewer tests)") \
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \

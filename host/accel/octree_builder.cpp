@@ -286,6 +286,10 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   if (!how.empty() && how != "leaf" && how != "sah")
     throw InputError(fmt::format("--octree-build '{}': expected sah or leaf", how));
   const bool sah = how == "sah";
+  const std::string& mb = params.octreeMailbox;
+  if (!mb.empty() && mb != "on" && mb != "off")
+    throw InputError(fmt::format("--octree-mailbox '{}': expected on or off", mb));
+  const bool mailbox = mb == "on";
   const int maxLeaf = sah ? 0 : params.octreeLeaf > 0 ? params.octreeLeaf : kDefaultLeaf;
   // An explicit --octree-depth is a hard limit; by default a leaf rule node
   // splits freely down to kDefaultDepth and beyond only by the heuristic.
@@ -320,18 +324,19 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   out.header.nNodes = static_cast<std::uint32_t>(out.nodes.size());
   out.header.nRefs = static_cast<std::uint32_t>(out.refs.size());
   out.header.maxDepth = static_cast<std::uint32_t>(bld.reached.load());
-  out.header.pad = 0;
+  out.header.flags = mailbox ? CR_OCTREE_MAILBOX_ON : 0u;
 
   info.nodes = out.nodes.size();
   info.leaves += fl.nEmptyOctants;
   info.emptyLeaves += fl.nEmptyOctants;
   info.refs = out.refs.size();
   info.bytes = sizeof(OctreeHeader) + out.nodes.size() * sizeof(OctreeNode) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("{} depth={} reached={} unsplit={} (leaves include {} empty octants)",
+  info.params = fmt::format("{} depth={} reached={} unsplit={}{} (leaves include {} empty octants)",
                             sah ? std::string("sah") : fmt::format("leaf={}", maxLeaf),
                             sah || sahDepth == maxDepth ? fmt::to_string(maxDepth)
                                                         : fmt::format("{}+sah..{}", sahDepth, maxDepth),
-                            out.header.maxDepth, bld.nUnsplit.load(), fl.nEmptyOctants);
+                            out.header.maxDepth, bld.nUnsplit.load(), mailbox ? " mailbox=on" : "",
+                            fl.nEmptyOctants);
   return out;
 }
 

@@ -279,11 +279,18 @@ AccelParams ParamsFrom(const nb::dict& d)
   }
     CR_ACCEL_PARAMS(CR_PY_PARAM)
 #undef CR_PY_PARAM
-    if (!known)
-      throw nb::type_error(("tracer() got an unexpected keyword argument '" + key +
-                            "' (structure parameters: grid_density, octree_leaf, octree_depth, octree_build, bvh_leaf, "
-                            "bvh_quality, bvh_sah_block, hgrid_top_density, hgrid_density, hgrid_leaf)")
+    if (!known) {
+      // The structure parameters' names, from the same list.
+      std::string names;
+#define CR_PY_PARAM_NAME(f, T, opt, help) names += std::string(names.empty() ? "" : ", ") + (opt + 2);
+      CR_ACCEL_PARAMS(CR_PY_PARAM_NAME)
+#undef CR_PY_PARAM_NAME
+      for (char& c : names)
+        if (c == '-') c = '_';
+      throw nb::type_error(("tracer() got an unexpected keyword argument '" + key + "' (structure parameters: " +
+                            names + ")")
                                .c_str());
+    }
   }
   return p;
 }
