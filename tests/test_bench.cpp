@@ -116,7 +116,7 @@ TEST_CASE("bench --quick on one scene: files, Embree rows, 0 wrong in robust row
   fs::remove_all(dir);
 }
 
-TEST_CASE("bench: unknown scenes and backends are bad input")
+TEST_CASE("bench: unknown scenes, backends and bad structure parameters are bad input")
 {
   const fs::path dir = TempDir("bad");
   std::string err;
@@ -125,6 +125,10 @@ TEST_CASE("bench: unknown scenes and backends are bad input")
   CHECK(RunBinary("bench tetra --backend cuda --out " + (dir / "o").string(), dir, &err) == 2);
   CHECK(err.find("unknown backend 'cuda'") != std::string::npos);
   CHECK(RunBinary("bench tetra --kinds sideways --out " + (dir / "o").string(), dir, &err) == 2);
+  // A bad structure parameter stops the run, whatever structures it times.
+  CHECK(RunBinary("bench tetra --accel bvh --octree-mailbox maybe --out " + (dir / "o").string(), dir, &err) == 2);
+  CHECK(err.find("--octree-mailbox 'maybe': expected on or off") != std::string::npos);
+  CHECK(!fs::exists(dir / "o" / "results.json"));
   fs::remove_all(dir);
 }
 

@@ -48,6 +48,7 @@ struct BenchOptions {
   // (the row's scene is then NAME@eps=E,w=W,steps=N); empty: the scene's own.
   std::vector<double> sdfEps, sdfRelax;
   std::vector<long> sdfSteps;
+  AccelParams params;  // the structures' parameters for every row (CR_ACCEL_PARAMS; default: the builders')
 };
 
 // The configurations a run times, in table order. With no explicit lists:

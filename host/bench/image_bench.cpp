@@ -30,9 +30,10 @@ Image RenderWith(const Scene& scene, Tracer& tracer, const RenderOptions& base, 
   return img;
 }
 
-std::unique_ptr<Tracer> MakeTracer(const Scene& scene, const Combo& c)
+std::unique_ptr<Tracer> MakeTracer(const Scene& scene, const Combo& c, const AccelParams& params)
 {
   TraceConfig cfg;
+  cfg.params = params;
   cfg.backend = c.backend;
   cfg.accel = c.accel;
   cfg.precision = c.precision;
@@ -80,7 +81,7 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
     if (EmbreeAvailable()) combos.push_back(Combo{Backend::Embree, AccelKind::BVH, Precision::Robust, "single"});
   }
   const Combo refCombo{Backend::Reference, AccelKind::BVH, Precision::Fp64, ""};
-  auto refTracer = MakeTracer(scene, refCombo);
+  auto refTracer = MakeTracer(scene, refCombo, o.params);
   RenderOptions test;
   test.integrator = o.integrator;
   test.diffuse = o.diffuse;
@@ -115,7 +116,7 @@ std::vector<ImageRow> RunImageBench(const SceneRef& sref, const ImageBenchOption
     std::unique_ptr<Tracer> tracer;
     std::string skip;
     try {
-      tracer = MakeTracer(scene, c);
+      tracer = MakeTracer(scene, c, o.params);
     } catch (const std::exception& e) {
       skip = fmt::format("skipped: {}", e.what());
     }

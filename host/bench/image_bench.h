@@ -32,6 +32,7 @@ struct ImageBenchOptions {
   Integrator integrator = Integrator::Whitted;
   DiffuseGather diffuse;
   int maxDepth = 0;  // 0: 5 for Whitted, 8 for the path tracer
+  AccelParams params;  // the structures' parameters (the reference's too)
 };
 
 struct ImageRow {

@@ -133,6 +133,7 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
       cfg.accel = combo.accel;
       cfg.precision = combo.precision;
       cfg.variant = combo.variant;
+      cfg.params = o.params;
       cfg.threads = o.threads;
       if (combo.backend == Backend::OpenCL) cfg.device = o.device;
       std::unique_ptr<Tracer> tracer, statsTracer;

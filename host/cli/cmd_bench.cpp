@@ -90,8 +90,14 @@ json OptionsJson(const bench::BenchOptions& o, int threads)
 {
   std::vector<std::string> kinds;
   for (RayKind k : o.kinds) kinds.push_back(RayKindName(k));
+  // The structure parameters given (CR_ACCEL_PARAMS; the others are the builders' defaults).
+  json params = json::object();
+#define CR_BENCH_PARAM_JSON(f, T, opt, help) \
+  if (o.params.f != T{}) params[std::string(opt).substr(2)] = o.params.f;
+  CR_ACCEL_PARAMS(CR_BENCH_PARAM_JSON)
+#undef CR_BENCH_PARAM_JSON
   return json{{"rays", o.rays},   {"repeat", o.repeat}, {"threads", threads}, {"kinds", kinds},
-              {"quick", o.quick}, {"seed", o.seed},     {"stats", o.stats}};
+              {"quick", o.quick}, {"seed", o.seed},     {"stats", o.stats},   {"structure_params", params}};
 }
 
 // Runs bench/plot.py on DIR with the first python3 that has matplotlib (the
@@ -128,6 +134,7 @@ Run RegisterBench(CLI::App& app)
     int imageReferenceSpp = 0;
     std::vector<double> sdfEps, sdfRelax;
     std::vector<long> sdfSteps;
+    AccelParams params;
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("bench", "Benchmark suite: structures x backends x ray kinds against Embree, with "
@@ -166,6 +173,7 @@ Run RegisterBench(CLI::App& app)
       ->delimiter(',');
   cmd->add_option("--image-reference-spp", o->imageReferenceSpp, "Image study: spp of the fp64 reference (default 64)");
   cmd->add_option("--image-size", o->imageSize, "Image study: WxH (default 96x96)");
+  AddAccelParamOptions(cmd, o->params);
   cmd->add_flag("--hard", o->hard, "Run the hard-case suite instead (writes DIR/HARD_CASES.md)");
   cmd->add_flag("--scaling", o->scaling, "Run the scaling study instead (generated scenes, 10^3..10^7 primitives)");
   cmd->add_flag("--quick", o->quick, "CI size: 4096 rays per set, one timed run, a tiny image study");
@@ -187,6 +195,12 @@ Run RegisterBench(CLI::App& app)
     b.sdfEps = o->sdfEps;
     b.sdfRelax = o->sdfRelax;
     b.sdfSteps = o->sdfSteps;
+    b.params = o->params;
+    // Bad structure parameters are bad input for the whole run (not a
+    // skipped row each): every builder checks them on an empty scene.
+#define CR_BENCH_CHECK_PARAMS(N, U, l, H, Nd) BuildAccel(Scene{}, AccelKind::N, b.params);
+    CR_ACCEL_TYPES(CR_BENCH_CHECK_PARAMS)
+#undef CR_BENCH_CHECK_PARAMS
     b.accels = ParseList<AccelKind>(o->accels, ParseAccelKind);
     b.backends = ParseList<Backend>(o->backends, ParseBackend);
     b.precisions = ParseList<Precision>(o->precisions, ParsePrecision);
@@ -286,6 +300,7 @@ Run RegisterBench(CLI::App& app)
       results.erase("images");
       if (b.images) {
         bench::ImageBenchOptions io;
+        io.params = b.params;
         if (b.quick) {
           io.width = io.height = 32;
           io.spps = {1, 4};

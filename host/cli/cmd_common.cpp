@@ -8,6 +8,17 @@
 
 namespace cr::cli {
 
+void AddAccelParamOptions(CLI::App* cmd, AccelParams& params)
+{
+#define CR_CLI_ACCEL_PARAM(f, T, opt, help)                                                        \
+  if constexpr (std::is_arithmetic_v<T>)                                                          \
+    cmd->add_option(opt, params.f, std::string(help) + " (0: default)")->check(CLI::NonNegativeNumber); \
+  else                                                                                            \
+    cmd->add_option(opt, params.f, std::string(help) + " (default: the first)");
+  CR_ACCEL_PARAMS(CR_CLI_ACCEL_PARAM)
+#undef CR_CLI_ACCEL_PARAM
+}
+
 void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
 {
   cmd->add_option("--accel", o.accel, "Acceleration structure: " + AccelKindNames())->capture_default_str();
@@ -17,13 +28,7 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
       ->capture_default_str();
   cmd->add_option("--precision", o.precision, "Precision mode: fast, robust or fp64")->capture_default_str();
   cmd->add_option("--threads", o.threads, "CPU threads (0: all cores)")->check(CLI::NonNegativeNumber);
-#define CR_CLI_ACCEL_PARAM(f, T, opt, help)                                                        \
-  if constexpr (std::is_arithmetic_v<T>)                                                          \
-    cmd->add_option(opt, o.params.f, std::string(help) + " (0: default)")->check(CLI::NonNegativeNumber); \
-  else                                                                                            \
-    cmd->add_option(opt, o.params.f, std::string(help) + " (default: the first)");
-  CR_ACCEL_PARAMS(CR_CLI_ACCEL_PARAM)
-#undef CR_CLI_ACCEL_PARAM
+  AddAccelParamOptions(cmd, o.params);
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx2, sse4 or scalar (default: best available)");
   cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU); all, or a list "
                  "N,M: every device named traces, sharing each batch");

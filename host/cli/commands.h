@@ -15,6 +15,8 @@ using Run = std::function<int()>;
 
 // The options every command that builds a tracer shares (TracerOptions,
 // host/trace/tracer.h, which the Python API fills too).
+// The structures' parameters (CR_ACCEL_PARAMS) as options of cmd.
+void AddAccelParamOptions(CLI::App* cmd, AccelParams& params);
 void AddTracerOptions(CLI::App* cmd, TracerOptions& o);
 
 // Parses "WxH" (InputError on anything else).
