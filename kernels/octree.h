@@ -142,8 +142,9 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
   CR_COUNT(st, nTS);
   const int useMailbox = CR_OCTREE_USE_MAILBOX(hdr);
-  uint mailbox[CR_OCTREE_MAILBOX];
-  CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
+  uint mailbox[CR_OCTREE_MAILBOX]; /* read only where useMailbox */
+  if (useMailbox)
+    CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
   if (nodes[0].childMask == 0u) {
     Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rootExit, mailbox, useMailbox, st);
     return;
