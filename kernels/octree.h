@@ -56,8 +56,13 @@
 #define CR_OCTREE_MAILBOX_BUILD 0
 #endif
 #define CR_OCTREE_USE_MAILBOX(hdr) CR_OCTREE_MAILBOX_BUILD
+#ifndef CR_OCTREE_MARGIN_BUILD
+#define CR_OCTREE_MARGIN_BUILD 0
+#endif
+#define CR_OCTREE_USE_RAY_MARGIN(hdr) CR_OCTREE_MARGIN_BUILD
 #else
 #define CR_OCTREE_USE_MAILBOX(hdr) (((hdr)->flags & CR_OCTREE_MAILBOX_ON) != 0u)
+#define CR_OCTREE_USE_RAY_MARGIN(hdr) (((hdr)->flags & CR_OCTREE_MARGIN_RAY) != 0u)
 #endif
 
 /* Plane i (0 <= i <= 2^level) of `level` on `axis`:
@@ -94,6 +99,25 @@ CR_FUNC uint Octree_FirstChild(const real tm[3], real tStart)
   return (tm[0] < tStart ? 1u : 0u) | (tm[1] < tStart ? 2u : 0u) | (tm[2] < tStart ? 4u : 0u);
 }
 
+/* The ray's own margin (--octree-margin ray): each parameter Ray_PlaneT
+ * computes, (p - o) * inv with p a float plane, lies within 3 roundings of
+ * the exact (p - o) / d (4 where a device's 1 / d errs by 2.5 ulps, as
+ * OpenCL allows), relative to itself, so the exact parameter lies in
+ * [Octree_Lo(t), Octree_Hi(t)]: t moved outward by 8 ulps of float
+ * (generous in fp64, where the parameters are doubles) and by the smallest
+ * normal float (a parameter that underflows). The bound is the ray's, not
+ * the scene's: a ray that starts near a small object gets margins as small
+ * as its own rounding there. */
+#define CR_OCTREE_WIDEN 0x1.0p-20f
+CR_FUNC real Octree_Lo(real t)
+{
+  return t * (t > (real)0.0f ? (real)(1.0f - CR_OCTREE_WIDEN) : (real)(1.0f + CR_OCTREE_WIDEN)) - (real)0x1.0p-126f;
+}
+CR_FUNC real Octree_Hi(real t)
+{
+  return t * (t > (real)0.0f ? (real)(1.0f + CR_OCTREE_WIDEN) : (real)(1.0f - CR_OCTREE_WIDEN)) + (real)0x1.0p-126f;
+}
+
 /* Tests a leaf's references. Returns 1 when the query is answered: any hit
  * (anyHit), or a closest hit so far that lies within the leaf (t <= tExit).
  * A hit beyond tExit is kept, but a nearer one may lie in a later cell. */
@@ -116,6 +140,120 @@ CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* ref
   return hit->t <= tExit ? 1 : 0;
 }
 
+/* The walk with the ray's own margins (--octree-margin ray; the builder
+ * then grows cells only by the rounding of its own double tests). The
+ * classic walk's sequence of cells relies on the order of the float
+ * parameters, which near a cell's edge or corner may differ from the exact
+ * order by a sliver; the builder's padding, a part of the scene's size,
+ * covers that for every ray, and also stops the subdivision where cells
+ * come near the padding's size (a teapot in a stadium). Here every cell
+ * takes the interval [Octree_Lo(entry), Octree_Hi(exit)], which holds the
+ * exact ray's interval in it whatever the rounding, so no cell the exact
+ * ray crosses is skipped, whatever the cells' size. The walk is then a
+ * search of the tree, as a BVH's: at each interior node the children whose
+ * widened intervals meet [tmin, hit t] (empty octants are not stored and
+ * not visited), in increasing mirrored octant, the order in which a ray
+ * crosses them (Revelles': each step sets a bit), each child dropped when
+ * the closest hit so far lies before its widened entry. Any order would
+ * give the same closest hit (a dropped child holds nothing nearer), this
+ * one finds it soonest; the SIMD packet walk (simd/octree_packet.h) keeps
+ * it lane by lane, so its answers and counts are these. A hit beyond a leaf
+ * is kept, as in the classic walk. Per level a frame: the node, its
+ * mirrored parameters, the children still to visit and their entries.
+ * Counts: nTS nodes visited, nLeaves the leaves among them (empty octants
+ * are not visited), nIT primitive tests. */
+CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
+                             CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray, Hit* hit, int anyHit,
+                             TraceStats* st)
+{
+  uint signMask = 0u;
+  for (int a = 0; a < 3; ++a)
+    if (ray->inv[a] < (real)0.0f) signMask |= 1u << a;
+  uint c[3] = {0u, 0u, 0u};
+  real t0[3], tm[3], t1[3];
+  Octree_CellT(hdr, ray, signMask, 0u, c, t0, tm, t1);
+  const real rootEnter = Octree_Lo(fmax(fmax(t0[0], t0[1]), t0[2]));
+  const real rootExit = Octree_Hi(fmin(fmin(t1[0], t1[1]), t1[2]));
+  if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
+  CR_COUNT(st, nTS);
+  const int useMailbox = CR_OCTREE_USE_MAILBOX(hdr);
+  uint mailbox[CR_OCTREE_MAILBOX]; /* read only where useMailbox */
+  if (useMailbox)
+    CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
+  if (nodes[0].childMask == 0u) {
+    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, st);
+    return;
+  }
+  /* Frame of level L: fT[9L ..] the node's t0, tm, t1; fEnter[8L + m] the
+   * widened entry of mirrored child m; fTodo[L] the children to visit. */
+  real fT[9 * CR_OCTREE_MAX_DEPTH];
+  real fEnter[8 * CR_OCTREE_MAX_DEPTH];
+  uint fNode[CR_OCTREE_MAX_DEPTH], fTodo[CR_OCTREE_MAX_DEPTH];
+  int level = 0;
+  uint ni = 0u;
+  for (;;) {
+    /* Node ni at `level` (coordinates c) with parameters t0, tm, t1. */
+    {
+      CR_GLOBAL const OctreeNode* n = nodes + ni;
+      uint todo = 0u;
+      CR_UNROLL for (uint m = 0u; m < 8u; ++m) {
+        if (((n->childMask >> (m ^ signMask)) & 1u) == 0u) continue;
+        const real ce =
+            Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
+        const real cx =
+            Octree_Hi(fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]));
+        if (fmax(ce, ray->tmin) <= fmin(cx, hit->t)) {
+          todo |= 1u << m;
+          fEnter[8 * level + (int)m] = ce;
+        }
+      }
+      CR_UNROLL for (int a = 0; a < 3; ++a) {
+        fT[9 * level + a] = t0[a];
+        fT[9 * level + 3 + a] = tm[a];
+        fT[9 * level + 6 + a] = t1[a];
+      }
+      fNode[level] = ni;
+      fTodo[level] = todo;
+    }
+    /* The next child to visit, climbing out of finished nodes. */
+    for (;;) {
+      const uint todo = fTodo[level];
+      if (todo == 0u) {
+        if (level == 0) return;
+        --level;
+        c[0] >>= 1;
+        c[1] >>= 1;
+        c[2] >>= 1;
+        continue;
+      }
+      const uint m = cr_popcount((todo & (0u - todo)) - 1u); /* the lowest: Revelles' order */
+      fTodo[level] = todo & (todo - 1u);
+      if (fEnter[8 * level + (int)m] > hit->t) continue; /* the closest hit lies before the child */
+      const uint o = m ^ signMask;
+      CR_GLOBAL const OctreeNode* n = nodes + fNode[level];
+      const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
+      CR_COUNT(st, nTS);
+      if (nodes[ci].childMask == 0u) {
+        if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, st)) return;
+        continue;
+      }
+      /* Descend: the child's near and far planes are the node's. */
+      CR_ASSERT(level + 1 < CR_OCTREE_MAX_DEPTH);
+      CR_UNROLL for (int a = 0; a < 3; ++a) {
+        const real p0 = fT[9 * level + a], pm = fT[9 * level + 3 + a], p1 = fT[9 * level + 6 + a];
+        t0[a] = ((m >> a) & 1u) ? pm : p0;
+        t1[a] = ((m >> a) & 1u) ? p1 : pm;
+        c[a] = 2u * c[a] + ((o >> a) & 1u);
+      }
+      ++level;
+      CR_UNROLL for (int a = 0; a < 3; ++a)
+        tm[a] = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, (uint)level + 1u, 2u * c[a] + 1u));
+      ni = ci;
+      break;
+    }
+  }
+}
+
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the
  * octree; `hit` must come from Hit_Init. Counts (CR_STATS): nTS nodes visited
  * (interior, leaf and empty octant), nLeaves leaf cells visited (empty
@@ -124,6 +262,10 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
                           CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray, Hit* hit, int anyHit,
                           TraceStats* st)
 {
+  if (CR_OCTREE_USE_RAY_MARGIN(hdr)) {
+    Octree_TraceRay(hdr, nodes, refs, pv, ray, hit, anyHit, st);
+    return;
+  }
   /* inv = 1/dir keeps the sign bit of dir: -0 gives -inf, so it is mirrored. */
   uint signMask = 0u;
   for (int a = 0; a < 3; ++a)

@@ -25,7 +25,9 @@
  * nTS nodes whose cell the lane entered, nLeaves leaves among them, nIT
  * primitive tests; empty octants are not visited (nEmptyLeaves stays 0).
  * With the mailbox (--octree-mailbox on) each lane skips a reference it has
- * tested in an earlier leaf (exact, as in Octree_Trace). */
+ * tested in an earlier leaf (exact, as in Octree_Trace). With the ray's
+ * margins (--octree-margin ray) each lane's intervals are widened by its own
+ * rounding (Octree_Lo, Octree_Hi), as in Octree_TraceRay. */
 #ifndef CELLRAY_KERNELS_OCTREE_PACKET_CL
 #define CELLRAY_KERNELS_OCTREE_PACKET_CL
 #include "octree.h"
@@ -41,6 +43,17 @@
  * stack size, its childMask, and the range of the leaf to test. */
 #define CR_OCTREE_PACKET_STATE 10
 #define CR_OCTREE_PACKET_END 0xFFFFFFFFu
+
+/* With the ray's margins (--octree-margin ray, CR_OCTREE_MARGIN_BUILD) each
+ * lane widens its intervals as Octree_TraceRay does; this walk already
+ * visits every child whose interval meets the lane's, in any order. */
+#if CR_OCTREE_MARGIN_BUILD
+#define CR_OCTREE_PACKET_LO(t) Octree_Lo(t)
+#define CR_OCTREE_PACKET_HI(t) Octree_Hi(t)
+#else
+#define CR_OCTREE_PACKET_LO(t) (t)
+#define CR_OCTREE_PACKET_HI(t) (t)
+#endif
 
 /* The node's planes as lane 0 publishes them (sPlane): low, high and mid
  * plane of each axis, CR_OCTREE_PACKET_PLANE_STRIDE floats apart. Computed
@@ -128,13 +141,15 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
         t0[a] = neg ? hi : lo;
         t1[a] = neg ? lo : hi;
       }
-      const real ce = fmax(fmax(t0[0], t0[1]), t0[2]);
-      const real cx = fmin(fmin(t1[0], t1[1]), t1[2]);
+      const real ce = CR_OCTREE_PACKET_LO(fmax(fmax(t0[0], t0[1]), t0[2]));
+      const real cx = CR_OCTREE_PACKET_HI(fmin(fmin(t1[0], t1[1]), t1[2]));
       in = live & (fmax(ce, ray.tmin) <= fmin(cx, hitT) ? 1 : 0);
       uint enter = 0u;
       CR_UNROLL for (uint m = 0u; m < 8u; ++m) {
-        const real cce = fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]);
-        const real ccx = fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]);
+        const real cce =
+            CR_OCTREE_PACKET_LO(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
+        const real ccx =
+            CR_OCTREE_PACKET_HI(fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]));
         const uint hit = (cce <= ccx && ccx >= ray.tmin && cce <= hitT) ? 1u : 0u;
         enter |= hit << (m ^ signMask);
       }

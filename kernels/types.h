@@ -306,7 +306,10 @@ typedef struct {
 /* Octree header, 32 bytes: a cube [rootMin, rootMin + rootSize]^3. Planes are
  * rootMin + i * (rootSize * 2^-level), computed only by Octree_Plane().
  * flags: CR_OCTREE_MAILBOX_ON (--octree-mailbox on: the walks skip a
- * primitive the ray has tested in an earlier leaf, kernels/octree.h). */
+ * primitive the ray has tested in an earlier leaf, kernels/octree.h);
+ * CR_OCTREE_MARGIN_RAY (--octree-margin ray: cells take their references
+ * without the scene-relative padding, and the walks widen each cell's
+ * parameter interval by the ray's own rounding instead, Octree_TraceRay). */
 typedef struct {
   float rootMin[3];
   float rootSize;
@@ -316,6 +319,7 @@ typedef struct {
   uint flags;
 } OctreeHeader;
 #define CR_OCTREE_MAILBOX_ON 1u
+#define CR_OCTREE_MARGIN_RAY 2u
 /* Entries of the octree walk's mailbox when it is on (a power of two). */
 #define CR_OCTREE_MAILBOX 8
 

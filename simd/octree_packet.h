@@ -38,6 +38,31 @@ CR_SIMD_INLINE float OctreePlane(const OctreeHeader& h, int axis, std::uint32_t 
   return h.rootMin[axis] + static_cast<float>(i) * cell;
 }
 
+// Octree_Lo and Octree_Hi of kernels/octree.h (--octree-margin ray): a
+// float parameter moved outward by the ray's own rounding.
+inline constexpr float kOctreeWiden = 0x1.0p-20f;
+CR_SIMD_INLINE float OctreeLo(float t)
+{
+  return t * (t > 0.0f ? 1.0f - kOctreeWiden : 1.0f + kOctreeWiden) - 0x1.0p-126f;
+}
+CR_SIMD_INLINE float OctreeHi(float t)
+{
+  return t * (t > 0.0f ? 1.0f + kOctreeWiden : 1.0f - kOctreeWiden) + 0x1.0p-126f;
+}
+
+template <int N>
+CR_SIMD_INLINE vfloat<N> OctreeLoN(vfloat<N> t)
+{
+  return t * Select(t > vfloat<N>(0.0f), vfloat<N>(1.0f - kOctreeWiden), vfloat<N>(1.0f + kOctreeWiden)) -
+         vfloat<N>(0x1.0p-126f);
+}
+template <int N>
+CR_SIMD_INLINE vfloat<N> OctreeHiN(vfloat<N> t)
+{
+  return t * Select(t > vfloat<N>(0.0f), vfloat<N>(1.0f + kOctreeWiden), vfloat<N>(1.0f - kOctreeWiden)) +
+         vfloat<N>(0x1.0p-126f);
+}
+
 // The state of one node on the packet's path.
 template <int N>
 struct OctreeFrame {
@@ -219,6 +244,108 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
   }
 }
 
+// Octree_TraceRay (--octree-margin ray) for the lanes of `lanes`, whose
+// directions all have the sign bits signMask: one shared path through the
+// tree; at each node, every lane's widened interval of each child (from its
+// own parameters), and the children in increasing mirrored octant, each
+// with the lanes whose interval met [tmin, hit t] when the node was entered
+// and whose hit does not yet lie before its entry. Lane by lane that is the
+// single walk's search (the same children, order and tests), so answers
+// and counts are the scalar backend's.
+template <int N, unsigned kTypes, bool kFast, bool kStats>
+CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
+                                             unsigned lanes, unsigned signMask, int anyHit,
+                                             std::uint32_t (*mailbox)[N], TraceStatsSum& st)
+{
+  const OctreeHeader& hdr = *sc.octreeHeader;
+  const OctreeNode* nodes = sc.octreeNodes;
+  struct Frame {
+    vfloat<N> t0[3], tm[3], t1[3];
+    std::uint32_t node;
+    int m;                // the child under visit (or next)
+    std::uint8_t in[8];   // per mirrored child: the lanes that met it on entry
+  };
+  Frame fr[kOctreeMaxDepth];
+  std::uint32_t c[3] = {0u, 0u, 0u};
+  int d = 0;
+  Frame* F = &fr[0];
+  for (int a = 0; a < 3; ++a) {
+    const vfloat<N> lo = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 0u)), P.org[a], P.inv[a]);
+    const vfloat<N> hi = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 1u)), P.org[a], P.inv[a]);
+    F->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 1u, 1u)), P.org[a], P.inv[a]);
+    const bool neg = (signMask >> a) & 1u;
+    F->t0[a] = neg ? hi : lo;
+    F->t1[a] = neg ? lo : hi;
+  }
+  const vfloat<N> rootEnter = OctreeLoN<N>(Max(Max(F->t0[0], F->t0[1]), F->t0[2]));
+  const vfloat<N> rootExit = OctreeHiN<N>(Min(Min(F->t1[0], F->t1[1]), F->t1[2]));
+  unsigned live = lanes & (Max(rootEnter, P.tmin) <= Min(rootExit, H.t)).Bits();
+  if (!live) return;
+  if constexpr (kStats) st.nTS += PopCount(live);
+  const vfloat<N> never(-INFINITY);  // a leaf's exit that never ends the search
+  if (nodes[0].childMask == 0u) {
+    OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[0], P, H, live, never, anyHit, mailbox, st);
+    return;
+  }
+  // The lanes of `in` that meet each child of F's node.
+  auto enter = [&](Frame& G, unsigned in) {
+    std::uint32_t mine = nodes[G.node].childMask;
+    if (signMask & 1u) mine = ((mine & 0x55u) << 1) | ((mine & 0xAAu) >> 1);
+    if (signMask & 2u) mine = ((mine & 0x33u) << 2) | ((mine & 0xCCu) >> 2);
+    if (signMask & 4u) mine = ((mine & 0x0Fu) << 4) | ((mine & 0xF0u) >> 4);
+    for (int m = 0; m < 8; ++m) {
+      G.in[m] = 0;
+      if (!((mine >> m) & 1u)) continue;
+      const vfloat<N> ce = OctreeLoN<N>(
+          Max(Max((m & 1) ? G.tm[0] : G.t0[0], (m & 2) ? G.tm[1] : G.t0[1]), (m & 4) ? G.tm[2] : G.t0[2]));
+      const vfloat<N> cx = OctreeHiN<N>(
+          Min(Min((m & 1) ? G.t1[0] : G.tm[0], (m & 2) ? G.t1[1] : G.tm[1]), (m & 4) ? G.t1[2] : G.tm[2]));
+      G.in[m] = static_cast<std::uint8_t>(in & (Max(ce, P.tmin) <= Min(cx, H.t)).Bits());
+    }
+    G.m = 0;
+  };
+  F->node = 0u;
+  enter(*F, live);
+  for (;;) {
+    while (F->m < 8 && !(F->in[F->m] & live)) ++F->m;
+    if (F->m == 8) {
+      if (d == 0) return;
+      F = &fr[--d];
+      for (int a = 0; a < 3; ++a) c[a] >>= 1;
+      ++F->m;
+      continue;
+    }
+    const int m = F->m;
+    const vfloat<N> ce = OctreeLoN<N>(
+        Max(Max((m & 1) ? F->tm[0] : F->t0[0], (m & 2) ? F->tm[1] : F->t0[1]), (m & 4) ? F->tm[2] : F->t0[2]));
+    const unsigned vis = F->in[m] & live & (ce <= H.t).Bits();
+    if (!vis) {
+      ++F->m;
+      continue;
+    }
+    if constexpr (kStats) st.nTS += PopCount(vis);
+    const std::uint32_t o = std::uint32_t(m) ^ signMask;
+    const OctreeNode& n = nodes[F->node];
+    const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
+    if (nodes[ci].childMask == 0u) {
+      live &= ~OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[ci], P, H, vis, never, anyHit, mailbox, st);
+      ++F->m;
+      continue;
+    }
+    Frame* G = &fr[++d];
+    for (int a = 0; a < 3; ++a) {
+      c[a] = 2u * c[a] + ((o >> a) & 1u);
+      G->t0[a] = ((m >> a) & 1) ? F->tm[a] : F->t0[a];
+      G->t1[a] = ((m >> a) & 1) ? F->t1[a] : F->tm[a];
+      G->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, static_cast<std::uint32_t>(d) + 1u, 2u * c[a] + 1u)),
+                            P.org[a], P.inv[a]);
+    }
+    G->node = ci;
+    enter(*G, vis);
+    F = G;
+  }
+}
+
 // Closest hit (anyHit = 0) or any hit of the lanes in `active`, one pass per
 // class of direction signs among them.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
@@ -239,7 +366,10 @@ CR_SIMD_INLINE void OctreePacket_Trace(const KernelScene& sc, const RayPacket<N>
     unsigned cls = rest;
     for (int a = 0; a < 3; ++a) cls &= ((signMask >> a) & 1u) ? neg[a] : ~neg[a];
     rest &= ~cls;
-    OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
+    if (sc.octreeHeader->flags & CR_OCTREE_MARGIN_RAY)
+      OctreePacket_SearchSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
+    else
+      OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
   }
 }
 

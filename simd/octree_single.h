@@ -22,11 +22,127 @@ namespace cr::simd::CR_SIMD_NS {
 CR_SIMD_INLINE float FMaxS(float a, float b) { return a > b ? a : b; }
 CR_SIMD_INLINE float FMinS(float a, float b) { return a < b ? a : b; }
 
+// The children of a node that Octree_TraceRay visits: mirrored child m
+// (octant m ^ signMask) when it is stored and its interval, widened by
+// OctreeLo and OctreeHi, meets [tmin, hitT]; its widened entry goes to
+// enter[m]. Returns the mirrored children as bits.
+template <int N>
+CR_SIMD_INLINE std::uint32_t OctreeChildrenToVisit(std::uint32_t childMask, std::uint32_t signMask, const float t0[3],
+                                                   const float tm[3], const float t1[3], float tmin, float hitT,
+                                                   float enter[8])
+{
+  // The stored children in mirrored order: bit m of `mine` is bit m ^ signMask
+  // of childMask (swap bits, pairs, nibbles as signMask says).
+  std::uint32_t mine = childMask;
+  if (signMask & 1u) mine = ((mine & 0x55u) << 1) | ((mine & 0xAAu) >> 1);
+  if (signMask & 2u) mine = ((mine & 0x33u) << 2) | ((mine & 0xCCu) >> 2);
+  if (signMask & 4u) mine = ((mine & 0x0Fu) << 4) | ((mine & 0xF0u) >> 4);
+  const vfloat<N> lo(1.0f - kOctreeWiden), hi(1.0f + kOctreeWiden), tiny(0x1.0p-126f), zero(0.0f);
+  std::uint32_t todo = 0u;
+  for (int base = 0; base < 8; base += N) {
+    const unsigned kAllLanes = (1u << N) - 1u;
+    // Lanes whose child has the bit of axis a set: 0xAA, 0xCC, 0xF0 from base.
+    const vbool<N> up[3] = {vbool<N>::FromBits((0xAAu >> base) & kAllLanes),
+                            vbool<N>::FromBits((0xCCu >> base) & kAllLanes),
+                            vbool<N>::FromBits((0xF0u >> base) & kAllLanes)};
+    vfloat<N> ce, cx;
+    for (int a = 0; a < 3; ++a) {
+      const vfloat<N> e = Select(up[a], vfloat<N>(tm[a]), vfloat<N>(t0[a]));
+      const vfloat<N> x = Select(up[a], vfloat<N>(t1[a]), vfloat<N>(tm[a]));
+      ce = a == 0 ? e : Max(ce, e);
+      cx = a == 0 ? x : Min(cx, x);
+    }
+    ce = ce * Select(ce > zero, lo, hi) - tiny;
+    cx = cx * Select(cx > zero, hi, lo) + tiny;
+    const vbool<N> meets = Max(ce, vfloat<N>(tmin)) <= Min(cx, vfloat<N>(hitT));
+    ce.Store(enter + base);
+    todo |= meets.Bits() << base;
+  }
+  return todo & mine;
+}
+
+// Octree_TraceRay of kernels/octree.h (--octree-margin ray): the search of
+// the tree, front to back, with each cell's interval widened by the ray's
+// own rounding; the same parameters, children, order and counts. A leaf is
+// tested as in the classic walk (`leaf`, which never ends the search by
+// itself but for an any-hit query's hit).
+template <int N, unsigned kTypes, bool kFast, bool kStats, typename Leaf>
+CR_SIMD_INLINE void OctreeSingle_TraceRay(const KernelScene& sc, const Ray& ray, Hit& hit, std::uint32_t signMask,
+                                          const float rootT[9], TraceStatsSum& st, Leaf&& leaf)
+{
+  const OctreeHeader& hdr = *sc.octreeHeader;
+  const OctreeNode* nodes = sc.octreeNodes;
+  struct Frame {
+    float t[9];  // the node's mirrored t0, tm, t1
+    float enter[8];
+    std::uint32_t node, todo;
+  };
+  Frame stack[kOctreeMaxDepth];
+  std::uint32_t c[3] = {0u, 0u, 0u};
+  float t0[3], tm[3], t1[3];
+  for (int a = 0; a < 3; ++a) {
+    t0[a] = rootT[a];
+    tm[a] = rootT[3 + a];
+    t1[a] = rootT[6 + a];
+  }
+  int level = 0;
+  std::uint32_t ni = 0u;
+  for (;;) {
+    {
+      // The eight children's widened intervals, N at a time (lane k is
+      // mirrored child base + k), without a branch per child.
+      Frame& f = stack[level];
+      const std::uint32_t todo = OctreeChildrenToVisit<N>(nodes[ni].childMask, signMask, t0, tm, t1, ray.tmin,
+                                                          hit.t, f.enter);
+      for (int a = 0; a < 3; ++a) {
+        f.t[a] = t0[a];
+        f.t[3 + a] = tm[a];
+        f.t[6 + a] = t1[a];
+      }
+      f.node = ni;
+      f.todo = todo;
+    }
+    for (;;) {
+      Frame& f = stack[level];
+      if (f.todo == 0u) {
+        if (level == 0) return;
+        --level;
+        for (std::uint32_t& ck : c) ck >>= 1;
+        continue;
+      }
+      const std::uint32_t m = static_cast<std::uint32_t>(LowestBit(f.todo));
+      f.todo &= f.todo - 1u;
+      if (f.enter[m] > hit.t) continue;
+      const std::uint32_t o = m ^ signMask;
+      const OctreeNode& n = nodes[f.node];
+      const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
+      if constexpr (kStats) ++st.nTS;
+      if (nodes[ci].childMask == 0u) {
+        if (leaf(nodes[ci], -INFINITY)) return;
+        continue;
+      }
+      for (int a = 0; a < 3; ++a) {
+        const bool up = (m >> a) & 1u;
+        t0[a] = up ? f.t[3 + a] : f.t[a];
+        t1[a] = up ? f.t[6 + a] : f.t[3 + a];
+        c[a] = 2u * c[a] + ((o >> a) & 1u);
+      }
+      ++level;
+      for (int a = 0; a < 3; ++a)
+        tm[a] = PlaneT(OctreePlane(hdr, a, static_cast<std::uint32_t>(level) + 1u, 2u * c[a] + 1u), ray.org[a],
+                       ray.inv[a]);
+      ni = ci;
+      break;
+    }
+  }
+}
+
 // Closest hit (anyHit = 0) or any hit of one ray; `hit` from Hit_Init.
 template <unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hit& hit, int anyHit, TraceStatsSum& st)
 {
   const OctreeHeader& hdr = *sc.octreeHeader;
+  const bool rayMargin = (hdr.flags & CR_OCTREE_MARGIN_RAY) != 0u;
   const OctreeNode* nodes = sc.octreeNodes;
   std::uint32_t signMask = 0u;
   for (int a = 0; a < 3; ++a)
@@ -48,8 +164,12 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
     t0[a] = neg ? hi : lo;
     t1[a] = neg ? lo : hi;
   }
-  const float rootEnter = FMaxS(FMaxS(t0[0], t0[1]), t0[2]);
-  const float rootExit = FMinS(FMinS(t1[0], t1[1]), t1[2]);
+  float rootEnter = FMaxS(FMaxS(t0[0], t0[1]), t0[2]);
+  float rootExit = FMinS(FMinS(t1[0], t1[1]), t1[2]);
+  if (rayMargin) {
+    rootEnter = OctreeLo(rootEnter);
+    rootExit = OctreeHi(rootExit);
+  }
   if (!(FMaxS(rootEnter, ray.tmin) <= FMinS(rootExit, hit.t))) return;
   if constexpr (kStats) ++st.nTS;
   PackRayOf<4, kHasMotion<kTypes>> pr;
@@ -76,7 +196,12 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
     return hit.t <= tExit;
   };
   if (nodes[0].childMask == 0u) {
-    leaf(nodes[0], rootExit);
+    leaf(nodes[0], rayMargin ? -INFINITY : rootExit);
+    return;
+  }
+  if (rayMargin) {
+    const float rootT[9] = {t0[0], t0[1], t0[2], tm[0], tm[1], tm[2], t1[0], t1[1], t1[2]};
+    OctreeSingle_TraceRay<CR_SIMD_WIDTH, kTypes, kFast, kStats>(sc, ray, hit, signMask, rootT, st, leaf);
     return;
   }
   std::uint32_t ni = 0u;

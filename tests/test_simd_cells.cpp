@@ -25,7 +25,22 @@ using namespace cr;
 
 namespace {
 
-const AccelKind kCellAccels[] = {AccelKind::Grid, AccelKind::Octree, AccelKind::HGrid};
+// The structures, the octree with either margin (--octree-margin).
+struct CellStructure {
+  AccelKind accel;
+  AccelParams params;
+  const char* name;
+};
+AccelParams OctreeRayMargin()
+{
+  AccelParams p;
+  p.octreeMargin = "ray";
+  return p;
+}
+const CellStructure kCellAccels[] = {{AccelKind::Grid, {}, "grid"},
+                                     {AccelKind::Octree, {}, "octree"},
+                                     {AccelKind::Octree, OctreeRayMargin(), "octree margin=ray"},
+                                     {AccelKind::HGrid, {}, "hgrid"}};
 const char* const kVariants[] = {"packet", "single"};
 
 std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
@@ -73,10 +88,10 @@ std::vector<RayRecord> GridSnappedRays(const Scene& scene, std::uint64_t n)
       n, 21);
 }
 
-std::vector<RayRecord> OctreeSnappedRays(const Scene& scene, std::uint64_t n)
+std::vector<RayRecord> OctreeSnappedRays(const Scene& scene, const AccelParams& params, std::uint64_t n)
 {
   AccelInfo info;
-  const OctreeData oct = BuildOctree(scene, AccelParams{}, info);
+  const OctreeData oct = BuildOctree(scene, params, info);
   const OctreeHeader& h = oct.header;
   const float lo[3] = {h.rootMin[0], h.rootMin[1], h.rootMin[2]};
   const float hi[3] = {h.rootMin[0] + h.rootSize, h.rootMin[1] + h.rootSize, h.rootMin[2] + h.rootSize};
@@ -105,11 +120,11 @@ std::vector<RayRecord> HGridSnappedRays(const Scene& scene, std::uint64_t n)
       n, 23);
 }
 
-std::vector<RayRecord> SnappedRaysFor(AccelKind accel, const Scene& scene, std::uint64_t n)
+std::vector<RayRecord> SnappedRaysFor(const CellStructure& cs, const Scene& scene, std::uint64_t n)
 {
-  if (accel == AccelKind::Grid) return GridSnappedRays(scene, n);
-  if (accel == AccelKind::HGrid) return HGridSnappedRays(scene, n);
-  return OctreeSnappedRays(scene, n);
+  if (cs.accel == AccelKind::Grid) return GridSnappedRays(scene, n);
+  if (cs.accel == AccelKind::HGrid) return HGridSnappedRays(scene, n);
+  return OctreeSnappedRays(scene, cs.params, n);
 }
 
 std::vector<HitRecord> Trace(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
@@ -140,13 +155,14 @@ TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions,
   }
   for (const std::string& name : test::Scenes({"balls", "teapot", "rings", "tetra", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
-    for (AccelKind accel : kCellAccels) {
-      const auto rays = SnappedRaysFor(accel, scene, 3000);
+    for (const CellStructure& cs : kCellAccels) {
+      const auto rays = SnappedRaysFor(cs, scene, 3000);
       for (Precision prec : {Precision::Robust, Precision::Fast})
         for (bool occlusion : {false, true}) {
           TraceConfig scalarCfg;
           scalarCfg.backend = Backend::Scalar;
-          scalarCfg.accel = accel;
+          scalarCfg.accel = cs.accel;
+          scalarCfg.params = cs.params;
           scalarCfg.precision = prec;
           const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion);
           std::size_t nHits = 0;
@@ -159,13 +175,13 @@ TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions,
               cfg.isa = isa;
               cfg.variant = variant;
               const auto hits = Trace(scene, cfg, rays, occlusion);
-              INFO(name, " ", AccelKindName(accel), " ", PrecisionName(prec), occlusion ? " occlusion " : " closest ",
+              INFO(name, " ", cs.name, " ", PrecisionName(prec), occlusion ? " occlusion " : " closest ",
                    isa, " ", variant);
               CHECK(CountSame(hits, scalarHits) == rays.size());
             }
           if (prec == Precision::Robust) {
             const auto r = test::CheckTracer(scene, scalarCfg, rays, occlusion);
-            INFO(name, " ", AccelKindName(accel), occlusion ? " occlusion" : " closest", " (scalar vs reference)");
+            INFO(name, " ", cs.name, occlusion ? " occlusion" : " closest", " (scalar vs reference)");
             CHECK(r.wrong == 0);
           }
         }
@@ -181,11 +197,12 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
       const auto rays = test::MakeRays(scene, kind, 32);
-      for (AccelKind accel : kCellAccels)
+      for (const CellStructure& cs : kCellAccels)
         for (bool occlusion : {false, true}) {
         TraceConfig scalarCfg;
         scalarCfg.backend = Backend::Scalar;
-        scalarCfg.accel = accel;
+        scalarCfg.accel = cs.accel;
+        scalarCfg.params = cs.params;
         scalarCfg.stats = true;
         TraceStatsSum want;
         const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion, &want);
@@ -199,7 +216,7 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
             cfg.variant = variant;
             TraceStatsSum got;
             const auto hits = Trace(scene, cfg, rays, occlusion, &got);
-            INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant,
+            INFO(name, " ", RayKindName(kind), " ", cs.name, " ", isa, " ", variant,
                  occlusion ? " occlusion" : " closest");
             CHECK(CountSame(hits, scalarHits) == rays.size());
             CHECK(got.rays == want.rays);

@@ -9,6 +9,14 @@
 
 namespace cr {
 
+void OverrideAccelParams(AccelParams& base, const AccelParams& over)
+{
+#define CR_ACCEL_PARAM_OVERRIDE(f, T, opt, help) \
+  if (over.f != T{}) base.f = over.f;
+  CR_ACCEL_PARAMS(CR_ACCEL_PARAM_OVERRIDE)
+#undef CR_ACCEL_PARAM_OVERRIDE
+}
+
 std::string AccelKindNames()
 {
   std::string names;

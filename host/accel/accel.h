@@ -45,6 +45,10 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
   X(octreeMailbox, std::string, "--octree-mailbox",                                              \
     "Octree walk: off (the default: the classic walk tests a primitive in every leaf it meets) or on (a "  \
     "per-ray mailbox skips a primitive already tested in an earlier leaf; same answers, fewer tests)") \
+  X(octreeMargin, std::string, "--octree-margin",                                               \
+    "Octree robustness: scene (the default, the classic octree: cells take their references with a margin " \
+    "of the scene's size, which also bounds how small they get) or ray (cells without it, as deep as the " \
+    "heuristic finds it pays, and a front-to-back search that widens each cell by the ray's own rounding)") \
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \
@@ -62,6 +66,10 @@ struct AccelParams {
   CR_ACCEL_PARAMS(CR_ACCEL_PARAM_FIELD)
 #undef CR_ACCEL_PARAM_FIELD
 };
+
+// Sets in `base` every parameter that `over` gives (not 0, not empty): a
+// command line's parameters over a case's or a scene's own.
+void OverrideAccelParams(AccelParams& base, const AccelParams& over);
 
 // Per-structure measures (Havran): nodes or cells, leaves, empty leaves,
 // references, bytes of the uploaded arrays, build time.

@@ -70,6 +70,10 @@ constexpr double kMaxDuplication = 4.0;
 // Cell growth for insertion, relative to the scene's coordinate magnitude:
 // 2^-19 = 32 float ulps, above the few ulps of the traversal's rounding.
 constexpr double kCellPadRel = 0x1p-19;
+// With --octree-margin ray the walk widens each cell by the ray's own
+// rounding (Octree_TraceRay), and cells grow only by the rounding of the
+// builder's double tests: 2^-40 of the coordinates' magnitude.
+constexpr double kCellPadRelRay = 0x1p-40;
 // Nodes with more references than this split their octants in parallel.
 constexpr std::size_t kParallelRefs = 2048;
 // References a build may hold (512 MiB as uint32). Primitives that share an
@@ -89,8 +93,8 @@ struct BuildNode {
 
 class Builder {
  public:
-  Builder(const Scene& scene, int maxLeaf, int maxDepth, int sahDepth, bool sah)
-      : scene_(scene), maxLeaf_(maxLeaf), maxDepth_(maxDepth), sahDepth_(sahDepth), sah_(sah)
+  Builder(const Scene& scene, int maxLeaf, int maxDepth, int sahDepth, bool sah, double padRel)
+      : scene_(scene), maxLeaf_(maxLeaf), maxDepth_(maxDepth), sahDepth_(sahDepth), sah_(sah), padRel_(padRel)
   {
     const std::uint32_t n = scene.NumUnified();
     boxes_.resize(n);
@@ -138,7 +142,7 @@ class Builder {
     }
     double coord = 0.0;
     for (int a = 0; a < 3; ++a) coord = std::max({coord, std::fabs(Plane(a, 0, 0)), std::fabs(Plane(a, 0, 1))});
-    pad = kCellPadRel * (coord + double(header.rootSize));
+    pad = padRel_ * (coord + double(header.rootSize));
   }
 
   double Plane(int axis, std::uint32_t level, std::uint32_t i) const
@@ -246,6 +250,7 @@ class Builder {
   const PrimRanges ranges_ = scene_.Ranges();
   int maxLeaf_, maxDepth_, sahDepth_;
   bool sah_;
+  double padRel_;
   std::vector<DBox> boxes_;
 };
 
@@ -290,6 +295,10 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   if (!mb.empty() && mb != "on" && mb != "off")
     throw InputError(fmt::format("--octree-mailbox '{}': expected on or off", mb));
   const bool mailbox = mb == "on";
+  const std::string& margin = params.octreeMargin;
+  if (!margin.empty() && margin != "scene" && margin != "ray")
+    throw InputError(fmt::format("--octree-margin '{}': expected scene or ray", margin));
+  const bool rayMargin = margin == "ray";
   const int maxLeaf = sah ? 0 : params.octreeLeaf > 0 ? params.octreeLeaf : kDefaultLeaf;
   // An explicit --octree-depth is a hard limit; by default a leaf rule node
   // splits freely down to kDefaultDepth and beyond only by the heuristic.
@@ -297,7 +306,7 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   const int sahDepth = params.octreeDepth > 0 ? params.octreeDepth : kDefaultDepth;
 
   const std::uint32_t n = scene.NumUnified();
-  Builder bld(scene, maxLeaf, maxDepth, sahDepth, sah);
+  Builder bld(scene, maxLeaf, maxDepth, sahDepth, sah, rayMargin ? kCellPadRelRay : kCellPadRel);
   OctreeData out;
   auto root = std::make_unique<BuildNode>();
   if (n == 0) {
@@ -324,18 +333,19 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   out.header.nNodes = static_cast<std::uint32_t>(out.nodes.size());
   out.header.nRefs = static_cast<std::uint32_t>(out.refs.size());
   out.header.maxDepth = static_cast<std::uint32_t>(bld.reached.load());
-  out.header.flags = mailbox ? CR_OCTREE_MAILBOX_ON : 0u;
+  out.header.flags = (mailbox ? CR_OCTREE_MAILBOX_ON : 0u) | (rayMargin ? CR_OCTREE_MARGIN_RAY : 0u);
 
   info.nodes = out.nodes.size();
   info.leaves += fl.nEmptyOctants;
   info.emptyLeaves += fl.nEmptyOctants;
   info.refs = out.refs.size();
   info.bytes = sizeof(OctreeHeader) + out.nodes.size() * sizeof(OctreeNode) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("{} depth={} reached={} unsplit={}{} (leaves include {} empty octants)",
+  info.params = fmt::format("{} depth={} reached={} unsplit={}{}{} (leaves include {} empty octants)",
                             sah ? std::string("sah") : fmt::format("leaf={}", maxLeaf),
                             sah || sahDepth == maxDepth ? fmt::to_string(maxDepth)
                                                         : fmt::format("{}+sah..{}", sahDepth, maxDepth),
                             out.header.maxDepth, bld.nUnsplit.load(), mailbox ? " mailbox=on" : "",
+                            rayMargin ? " margin=ray" : "",
                             fl.nEmptyOctants);
   return out;
 }

@@ -63,6 +63,7 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
   s.octreeMailbox = config.params.octreeMailbox == "on";
+  s.octreeRayMargin = config.params.octreeMargin == "ray";
   s.anyHit = occlusion;
   s.camera = camera;
   s.unified = config.unifiedHits;
@@ -156,6 +157,7 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.coldInline) o += " -DCR_COLD_INLINE";
   if (s.stackless) o += " -DCR_BVH_STACKLESS";
   if (s.octreeMailbox) o += " -DCR_OCTREE_MAILBOX_BUILD=1";
+  if (s.octreeRayMargin) o += " -DCR_OCTREE_MARGIN_BUILD=1";
   o += fmt::format(" -DCR_PACKET_W={} -DCR_PACKET_H={}", s.packetW, s.packetH);
   if (!s.generic) {
 #define CR_HAS_OPTION_(T, U, a) o += fmt::format(" -DCR_HAS_" #U "={}", (s.types >> CR_PRIM_##U) & 1u);

@@ -28,6 +28,7 @@ struct ClProgramSpec {
   ClVariant variant = ClVariant::Ray;
   bool stackless = false;        // the BVH walked without a stack (CR_BVH_STACKLESS; --variant stackless)
   bool octreeMailbox = false;    // the octree walks with its mailbox (CR_OCTREE_MAILBOX_BUILD; --octree-mailbox on)
+  bool octreeRayMargin = false;  // the octree walks with the ray's margins (CR_OCTREE_MARGIN_BUILD; --octree-margin ray)
   bool camera = false;           // primary rays generated on the device, else rays from a buffer
   int packetW = 8, packetH = 8;  // work-group tile (the packet of the packet kernels)
   bool cameraFp64 = false;       // primary rays in double, bit-equal to the host's

@@ -21,7 +21,8 @@ Run RegisterHard(CLI::App& app)
   struct O {
     bool quick = false;
     std::vector<std::string> backends, accels, precisions, cases;
-    std::string out, simdVariant, octreeMailbox;
+    std::string out, simdVariant;
+    AccelParams params;
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand("hard", "Run the numerically hard cases on every structure x backend x precision");
@@ -32,8 +33,9 @@ Run RegisterHard(CLI::App& app)
   cmd->add_option("--case", o->cases, "Case names or prefixes (default: all), e.g. leaks/");
   cmd->add_option("--simd-variant", o->simdVariant, "The SIMD backend's traversal variant: packet, single or auto")
       ->check(CLI::IsMember({"packet", "single", "ray", "auto"}));
-  cmd->add_option("--octree-mailbox", o->octreeMailbox, "The octree walks with its mailbox (on) or without (off, the default)")
-      ->check(CLI::IsMember({"on", "off"}));
+  // Structure parameters (--octree-mailbox on, --octree-margin ray, ...) for
+  // every case, over the case's own.
+  AddAccelParamOptions(cmd, o->params);
   cmd->add_option("-o,--output", o->out, "Write the Markdown report here (default: stdout)");
   return [o]() {
     HardOptions opt;
@@ -43,7 +45,7 @@ Run RegisterHard(CLI::App& app)
     for (const auto& p : o->precisions) opt.precisions.push_back(ParsePrecision(p));
     opt.cases = o->cases;
     opt.simdVariant = o->simdVariant;
-    opt.octreeMailbox = o->octreeMailbox;
+    opt.params = o->params;
     opt.onResult = [](const HardCaseResult& r) {
       std::fprintf(stderr, "%-36s %-6s %-6s %-6s %s\n", r.caseName.c_str(), AccelKindName(r.accel), BackendName(r.backend),
                    PrecisionName(r.precision),

@@ -131,7 +131,7 @@ std::vector<HardCaseResult> RunHardSuite(const HardOptions& options)
           cfg.accel = accel;
           cfg.precision = p;
           cfg.params = c->params;
-          if (!options.octreeMailbox.empty()) cfg.params.octreeMailbox = options.octreeMailbox;
+          OverrideAccelParams(cfg.params, options.params);
           if (b == Backend::Simd) cfg.variant = options.simdVariant;
           try {
             const hard::CaseRun run = hard::RunCase(*c, *ref, cfg);

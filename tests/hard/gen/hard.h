@@ -23,7 +23,7 @@ struct HardOptions {
   bool quick = false;                 // reduced ray counts (CI)
   std::vector<std::string> cases;     // empty: every case; else names or name prefixes ("leaks/")
   std::string simdVariant;            // the SIMD backend's --variant (packet, single; empty: auto)
-  std::string octreeMailbox;          // --octree-mailbox for every case (on, off; empty: the case's own)
+  AccelParams params;                 // structure parameters for every case, over the case's own (0, empty: the case's)
   std::function<void(const HardCaseResult&)> onResult;  // progress: called after each combination
 };
 
