@@ -158,8 +158,8 @@ CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* ref
  * give the same closest hit (a dropped child holds nothing nearer), this
  * one finds it soonest; the SIMD packet walk (simd/octree_packet.h) keeps
  * it lane by lane, so its answers and counts are these. A hit beyond a leaf
- * is kept, as in the classic walk. Per level a frame: the node, its
- * mirrored parameters, the children still to visit and their entries.
+ * is kept, as in the classic walk. Per level a frame: the node and the
+ * children still to visit.
  * Counts: nTS nodes visited, nLeaves the leaves among them (empty octants
  * are not visited), nIT primitive tests. */
 CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
@@ -184,10 +184,10 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
     Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, st);
     return;
   }
-  /* Frame of level L: fT[9L ..] the node's t0, tm, t1; fEnter[8L + m] the
-   * widened entry of mirrored child m; fTodo[L] the children to visit. */
-  real fT[9 * CR_OCTREE_MAX_DEPTH];
-  real fEnter[8 * CR_OCTREE_MAX_DEPTH];
+  /* Frame of level L: the node and its children still to visit. The node's
+   * parameters are t0, tm, t1 while the walk is at its level, recomputed
+   * from the planes when it climbs back (the same values, bit for bit), so
+   * a frame is two words: no private array of parameters on a GPU. */
   uint fNode[CR_OCTREE_MAX_DEPTH], fTodo[CR_OCTREE_MAX_DEPTH];
   int level = 0;
   uint ni = 0u;
@@ -202,15 +202,7 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
             Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
         const real cx =
             Octree_Hi(fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]));
-        if (fmax(ce, ray->tmin) <= fmin(cx, hit->t)) {
-          todo |= 1u << m;
-          fEnter[8 * level + (int)m] = ce;
-        }
-      }
-      CR_UNROLL for (int a = 0; a < 3; ++a) {
-        fT[9 * level + a] = t0[a];
-        fT[9 * level + 3 + a] = tm[a];
-        fT[9 * level + 6 + a] = t1[a];
+        if (fmax(ce, ray->tmin) <= fmin(cx, hit->t)) todo |= 1u << m;
       }
       fNode[level] = ni;
       fTodo[level] = todo;
@@ -224,11 +216,15 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
         c[0] >>= 1;
         c[1] >>= 1;
         c[2] >>= 1;
+        Octree_CellT(hdr, ray, signMask, (uint)level, c, t0, tm, t1);
         continue;
       }
       const uint m = cr_popcount((todo & (0u - todo)) - 1u); /* the lowest: Revelles' order */
       fTodo[level] = todo & (todo - 1u);
-      if (fEnter[8 * level + (int)m] > hit->t) continue; /* the closest hit lies before the child */
+      /* Dropped when the closest hit lies before the child's entry. */
+      if (Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2])) >
+          hit->t)
+        continue;
       const uint o = m ^ signMask;
       CR_GLOBAL const OctreeNode* n = nodes + fNode[level];
       const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
@@ -239,15 +235,15 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
       }
       /* Descend: the child's near and far planes are the node's. */
       CR_ASSERT(level + 1 < CR_OCTREE_MAX_DEPTH);
-      CR_UNROLL for (int a = 0; a < 3; ++a) {
-        const real p0 = fT[9 * level + a], pm = fT[9 * level + 3 + a], p1 = fT[9 * level + 6 + a];
-        t0[a] = ((m >> a) & 1u) ? pm : p0;
-        t1[a] = ((m >> a) & 1u) ? p1 : pm;
-        c[a] = 2u * c[a] + ((o >> a) & 1u);
-      }
       ++level;
-      CR_UNROLL for (int a = 0; a < 3; ++a)
+      CR_UNROLL for (int a = 0; a < 3; ++a) {
+        if ((m >> a) & 1u)
+          t0[a] = tm[a];
+        else
+          t1[a] = tm[a];
+        c[a] = 2u * c[a] + ((o >> a) & 1u);
         tm[a] = Ray_PlaneT(ray, a, (real)Octree_Plane(hdr, a, (uint)level + 1u, 2u * c[a] + 1u));
+      }
       ni = ci;
       break;
     }

@@ -113,8 +113,11 @@ CR_SIMD_INLINE void OctreeFrame_Advance(OctreeFrame<N>& F, unsigned lanes)
 // or before the leaf's exit cx).
 // With `mailbox` (the octree has one: --octree-mailbox on), each lane
 // skips the references in its own (slot k of lane l at mailbox[k][l]).
+// Not inlined: its reference passes hold every primitive type's test, and
+// both walks call it from two places each (compile time; a call per leaf is
+// nothing beside the leaf's tests).
 template <int N, unsigned kTypes, bool kFast, bool kStats>
-CR_SIMD_INLINE unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNode& n, const RayPacket<N>& P,
+__attribute__((noinline)) unsigned OctreePacket_Leaf(const KernelScene& sc, const OctreeNode& n, const RayPacket<N>& P,
                                           HitPacket<N>& H, unsigned lanes, vfloat<N> cx, int anyHit,
                                           std::uint32_t (*mailbox)[N], TraceStatsSum& st)
 {
