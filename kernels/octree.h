@@ -161,29 +161,14 @@ CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* ref
  * is kept, as in the classic walk. Per level a frame: the node and the
  * children still to visit.
  * Counts: nTS nodes visited, nLeaves the leaves among them (empty octants
- * are not visited), nIT primitive tests. */
+ * are not visited), nIT primitive tests. Called by Octree_Trace below the
+ * root (an interior node), with the root's parameters t0, tm, t1. */
 CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const OctreeNode* nodes,
                              CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray, Hit* hit, int anyHit,
+                             uint signMask, real t0[3], real tm[3], real t1[3], uint* mailbox, int useMailbox,
                              TraceStats* st)
 {
-  uint signMask = 0u;
-  for (int a = 0; a < 3; ++a)
-    if (ray->inv[a] < (real)0.0f) signMask |= 1u << a;
   uint c[3] = {0u, 0u, 0u};
-  real t0[3], tm[3], t1[3];
-  Octree_CellT(hdr, ray, signMask, 0u, c, t0, tm, t1);
-  const real rootEnter = Octree_Lo(fmax(fmax(t0[0], t0[1]), t0[2]));
-  const real rootExit = Octree_Hi(fmin(fmin(t1[0], t1[1]), t1[2]));
-  if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
-  CR_COUNT(st, nTS);
-  const int useMailbox = CR_OCTREE_USE_MAILBOX(hdr);
-  uint mailbox[CR_OCTREE_MAILBOX]; /* read only where useMailbox */
-  if (useMailbox)
-    CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
-  if (nodes[0].childMask == 0u) {
-    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, st);
-    return;
-  }
   /* Frame of level L: the node and its children still to visit. The node's
    * parameters are t0, tm, t1 while the walk is at its level, recomputed
    * from the planes when it climbs back (the same values, bit for bit), so
@@ -258,10 +243,6 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
                           CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray, Hit* hit, int anyHit,
                           TraceStats* st)
 {
-  if (CR_OCTREE_USE_RAY_MARGIN(hdr)) {
-    Octree_TraceRay(hdr, nodes, refs, pv, ray, hit, anyHit, st);
-    return;
-  }
   /* inv = 1/dir keeps the sign bit of dir: -0 gives -inf, so it is mirrored. */
   uint signMask = 0u;
   for (int a = 0; a < 3; ++a)
@@ -275,8 +256,13 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   uint level = 0u;
   real t0[3], tm[3], t1[3];
   Octree_CellT(hdr, ray, signMask, 0u, c, t0, tm, t1);
-  const real rootEnter = fmax(fmax(t0[0], t0[1]), t0[2]);
-  const real rootExit = fmin(fmin(t1[0], t1[1]), t1[2]);
+  const int rayMargin = CR_OCTREE_USE_RAY_MARGIN(hdr);
+  real rootEnter = fmax(fmax(t0[0], t0[1]), t0[2]);
+  real rootExit = fmin(fmin(t1[0], t1[1]), t1[2]);
+  if (rayMargin) {
+    rootEnter = Octree_Lo(rootEnter);
+    rootExit = Octree_Hi(rootExit);
+  }
   if (!(fmax(rootEnter, ray->tmin) <= fmin(rootExit, hit->t))) return;
   CR_COUNT(st, nTS);
   const int useMailbox = CR_OCTREE_USE_MAILBOX(hdr);
@@ -284,7 +270,11 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   if (useMailbox)
     CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
   if (nodes[0].childMask == 0u) {
-    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rootExit, mailbox, useMailbox, st);
+    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rayMargin ? -(real)CR_INF : rootExit, mailbox, useMailbox, st);
+    return;
+  }
+  if (rayMargin) {
+    Octree_TraceRay(hdr, nodes, refs, pv, ray, hit, anyHit, signMask, t0, tm, t1, mailbox, useMailbox, st);
     return;
   }
   uint stackNode[CR_OCTREE_MAX_DEPTH];

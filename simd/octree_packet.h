@@ -139,6 +139,22 @@ __attribute__((noinline)) unsigned OctreePacket_Leaf(const KernelScene& sc, cons
   return done | (lanes & (H.t <= cx).Bits());
 }
 
+// Each lane's mirrored near, mid and far parameters of the root cell
+// (Octree_CellT at level 0).
+template <int N>
+CR_SIMD_INLINE void OctreePacket_RootT(const OctreeHeader& hdr, const RayPacket<N>& P, unsigned signMask,
+                                       vfloat<N> t0[3], vfloat<N> tm[3], vfloat<N> t1[3])
+{
+  for (int a = 0; a < 3; ++a) {
+    const vfloat<N> lo = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 0u)), P.org[a], P.inv[a]);
+    const vfloat<N> hi = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 1u)), P.org[a], P.inv[a]);
+    tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 1u, 1u)), P.org[a], P.inv[a]);
+    const bool neg = (signMask >> a) & 1u;
+    t0[a] = neg ? hi : lo;
+    t1[a] = neg ? lo : hi;
+  }
+}
+
 // The lanes of `lanes`, whose directions all have the sign bits signMask.
 template <int N, unsigned kTypes, bool kFast, bool kStats>
 CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
@@ -152,14 +168,7 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
   std::uint32_t c[3] = {0u, 0u, 0u};
   std::uint32_t level = 0u;
   OctreeFrame<N>* F = &fr[0];
-  for (int a = 0; a < 3; ++a) {
-    const vfloat<N> lo = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 0u)), P.org[a], P.inv[a]);
-    const vfloat<N> hi = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 1u)), P.org[a], P.inv[a]);
-    F->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 1u, 1u)), P.org[a], P.inv[a]);
-    const bool neg = (signMask >> a) & 1u;
-    F->t0[a] = neg ? hi : lo;
-    F->t1[a] = neg ? lo : hi;
-  }
+  OctreePacket_RootT<N>(hdr, P, signMask, F->t0, F->tm, F->t1);
   const vfloat<N> rootEnter = FMax(FMax(F->t0[0], F->t0[1]), F->t0[2]);
   const vfloat<N> rootExit = FMin(FMin(F->t1[0], F->t1[1]), F->t1[2]);
   unsigned live = lanes & (FMax(rootEnter, P.tmin) <= FMin(rootExit, H.t)).Bits();
@@ -272,14 +281,7 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
   std::uint32_t c[3] = {0u, 0u, 0u};
   int d = 0;
   Frame* F = &fr[0];
-  for (int a = 0; a < 3; ++a) {
-    const vfloat<N> lo = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 0u)), P.org[a], P.inv[a]);
-    const vfloat<N> hi = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 0u, 1u)), P.org[a], P.inv[a]);
-    F->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, 1u, 1u)), P.org[a], P.inv[a]);
-    const bool neg = (signMask >> a) & 1u;
-    F->t0[a] = neg ? hi : lo;
-    F->t1[a] = neg ? lo : hi;
-  }
+  OctreePacket_RootT<N>(hdr, P, signMask, F->t0, F->tm, F->t1);
   const vfloat<N> rootEnter = OctreeLoN<N>(Max(Max(F->t0[0], F->t0[1]), F->t0[2]));
   const vfloat<N> rootExit = OctreeHiN<N>(Min(Min(F->t1[0], F->t1[1]), F->t1[2]));
   unsigned live = lanes & (Max(rootEnter, P.tmin) <= Min(rootExit, H.t)).Bits();

@@ -458,6 +458,28 @@ TEST_CASE("octree: random rays snapped to cell planes, with +-0 direction compon
   }
 }
 
+namespace {
+// Every walk of the octree: the CPU ones, and OpenCL (per ray and packet)
+// where a device is present.
+struct OctreePath {
+  const char* name;
+  Backend backend;
+  const char* variant;
+  bool statsAsScalar;  // per-ray counts equal the scalar walk's (the OpenCL packet walk counts its own way)
+};
+std::vector<OctreePath> OctreePaths()
+{
+  std::vector<OctreePath> paths = {{"scalar", Backend::Scalar, "", true},
+                                   {"simd packet", Backend::Simd, "packet", true},
+                                   {"simd single", Backend::Simd, "single", true}};
+  if (test::HaveOpenCLDevice()) {
+    paths.push_back({"opencl ray", Backend::OpenCL, "ray", true});
+    paths.push_back({"opencl packet", Backend::OpenCL, "packet", false});
+  }
+  return paths;
+}
+}  // namespace
+
 TEST_CASE("octree: the mailbox (--octree-mailbox on) gives the classic walk's answers with fewer tests, per ray as on scalar")
 {
   // The teapot in a stadium: the ground and stands lie in many leaves, so
@@ -475,25 +497,13 @@ TEST_CASE("octree: the mailbox (--octree-mailbox on) gives the classic walk's an
   bad.octreeMailbox = "yes";
   CHECK_THROWS_AS(BuildOctree(scene, bad, info), InputError);
 
-  struct Path {
-    const char* name;
-    Backend backend;
-    const char* variant;
-    bool statsAsScalar;  // per-ray counts equal the scalar walk's (the OpenCL packet walk counts its own way)
-  };
-  std::vector<Path> paths = {{"scalar", Backend::Scalar, "", true},
-                             {"simd packet", Backend::Simd, "packet", true},
-                             {"simd single", Backend::Simd, "single", true}};
   const auto clCache = test::OpenCLTestCacheDir();
-  if (test::HaveOpenCLDevice()) {
-    paths.push_back({"opencl ray", Backend::OpenCL, "ray", true});
-    paths.push_back({"opencl packet", Backend::OpenCL, "packet", false});
-  }
+  const std::vector<OctreePath> paths = OctreePaths();
   for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
     const auto rays = test::MakeRays(scene, kind, 48);
     for (bool occlusion : {false, true}) {
       TraceStatsSum scalarOn;
-      for (const Path& p : paths) {
+      for (const OctreePath& p : paths) {
         CAPTURE(p.name);
         CAPTURE(occlusion);
         std::vector<HitRecord> hits[2];
@@ -547,20 +557,8 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
   bad.octreeMargin = "cell";
   CHECK_THROWS_AS(BuildOctree(scene, bad, info), InputError);
 
-  struct Path {
-    const char* name;
-    Backend backend;
-    const char* variant;
-    bool statsAsScalar;  // per-ray counts equal the scalar walk's (the OpenCL packet walk counts its own way)
-  };
-  std::vector<Path> paths = {{"scalar", Backend::Scalar, "", true},
-                             {"simd packet", Backend::Simd, "packet", true},
-                             {"simd single", Backend::Simd, "single", true}};
   const auto clCache = test::OpenCLTestCacheDir();
-  if (test::HaveOpenCLDevice()) {
-    paths.push_back({"opencl ray", Backend::OpenCL, "ray", true});
-    paths.push_back({"opencl packet", Backend::OpenCL, "packet", false});
-  }
+  const std::vector<OctreePath> paths = OctreePaths();
   for (RayKind kind : {RayKind::Primary, RayKind::Diffuse}) {
     const auto rays = test::MakeRays(scene, kind, 48);
     for (bool occlusion : {false, true}) {
@@ -572,7 +570,7 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
       CreateTracer(scene, base)->Trace(rays, Tracer::NoTimes(), classicHits, occlusion, &classicSt);
       for (const char* mailbox : {"off", "on"}) {
         TraceStatsSum scalarSt;
-        for (const Path& p : paths) {
+        for (const OctreePath& p : paths) {
           CAPTURE(std::string(p.name));
           CAPTURE(occlusion);
           CAPTURE(std::string(mailbox));
