@@ -50,6 +50,17 @@ CR_SIMD_INLINE float OctreeHi(float t)
   return t * (t > 0.0f ? 1.0f + kOctreeWiden : 1.0f - kOctreeWiden) + 0x1.0p-126f;
 }
 
+// The stored children in mirrored order: bit m is bit m ^ signMask of
+// childMask (bits, pairs, nibbles swapped as signMask says).
+CR_SIMD_INLINE std::uint32_t OctreeMirroredChildren(std::uint32_t childMask, std::uint32_t signMask)
+{
+  std::uint32_t mine = childMask;
+  if (signMask & 1u) mine = ((mine & 0x55u) << 1) | ((mine & 0xAAu) >> 1);
+  if (signMask & 2u) mine = ((mine & 0x33u) << 2) | ((mine & 0xCCu) >> 2);
+  if (signMask & 4u) mine = ((mine & 0x0Fu) << 4) | ((mine & 0xF0u) >> 4);
+  return mine;
+}
+
 template <int N>
 CR_SIMD_INLINE vfloat<N> OctreeLoN(vfloat<N> t)
 {
@@ -294,10 +305,7 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
   }
   // The lanes of `in` that meet each child of F's node.
   auto enter = [&](Frame& G, unsigned in) {
-    std::uint32_t mine = nodes[G.node].childMask;
-    if (signMask & 1u) mine = ((mine & 0x55u) << 1) | ((mine & 0xAAu) >> 1);
-    if (signMask & 2u) mine = ((mine & 0x33u) << 2) | ((mine & 0xCCu) >> 2);
-    if (signMask & 4u) mine = ((mine & 0x0Fu) << 4) | ((mine & 0xF0u) >> 4);
+    const std::uint32_t mine = OctreeMirroredChildren(nodes[G.node].childMask, signMask);
     for (int m = 0; m < 8; ++m) {
       G.in[m] = 0;
       if (!((mine >> m) & 1u)) continue;

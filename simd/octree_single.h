@@ -31,12 +31,7 @@ CR_SIMD_INLINE std::uint32_t OctreeChildrenToVisit(std::uint32_t childMask, std:
                                                    const float tm[3], const float t1[3], float tmin, float hitT,
                                                    float enter[8])
 {
-  // The stored children in mirrored order: bit m of `mine` is bit m ^ signMask
-  // of childMask (swap bits, pairs, nibbles as signMask says).
-  std::uint32_t mine = childMask;
-  if (signMask & 1u) mine = ((mine & 0x55u) << 1) | ((mine & 0xAAu) >> 1);
-  if (signMask & 2u) mine = ((mine & 0x33u) << 2) | ((mine & 0xCCu) >> 2);
-  if (signMask & 4u) mine = ((mine & 0x0Fu) << 4) | ((mine & 0xF0u) >> 4);
+  const std::uint32_t mine = OctreeMirroredChildren(childMask, signMask);
   const vfloat<N> lo(1.0f - kOctreeWiden), hi(1.0f + kOctreeWiden), tiny(0x1.0p-126f), zero(0.0f);
   std::uint32_t todo = 0u;
   for (int base = 0; base < 8; base += N) {
