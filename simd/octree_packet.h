@@ -282,19 +282,34 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
 {
   const OctreeHeader& hdr = *sc.octreeHeader;
   const OctreeNode* nodes = sc.octreeNodes;
+  // Each node's parameters are kept widened (OctreeLoN of its near and mid
+  // parameters, OctreeHiN of its mid and far ones): the widening is monotone,
+  // so a child's widened entry, the largest of its near parameters, is the
+  // largest of their widened values, bit for bit, and a child inherits three
+  // of its four widened triples from its parent.
   struct Frame {
-    vfloat<N> t0[3], tm[3], t1[3];
+    vfloat<N> e[2][3];  // OctreeLoN of the near ([0]) and mid ([1]) parameters, per axis
+    vfloat<N> x[2][3];  // OctreeHiN of the mid ([0]) and far ([1]) parameters
     std::uint32_t node;
-    int m;                // the child under visit (or next)
+    unsigned todo;        // mirrored children still to visit, in increasing order
     std::uint8_t in[8];   // per mirrored child: the lanes that met it on entry
   };
   Frame fr[kOctreeMaxDepth];
   std::uint32_t c[3] = {0u, 0u, 0u};
   int d = 0;
   Frame* F = &fr[0];
-  OctreePacket_RootT<N>(hdr, P, signMask, F->t0, F->tm, F->t1);
-  const vfloat<N> rootEnter = OctreeLoN<N>(Max(Max(F->t0[0], F->t0[1]), F->t0[2]));
-  const vfloat<N> rootExit = OctreeHiN<N>(Min(Min(F->t1[0], F->t1[1]), F->t1[2]));
+  {
+    vfloat<N> t0[3], tm[3], t1[3];
+    OctreePacket_RootT<N>(hdr, P, signMask, t0, tm, t1);
+    for (int a = 0; a < 3; ++a) {
+      F->e[0][a] = OctreeLoN<N>(t0[a]);
+      F->e[1][a] = OctreeLoN<N>(tm[a]);
+      F->x[0][a] = OctreeHiN<N>(tm[a]);
+      F->x[1][a] = OctreeHiN<N>(t1[a]);
+    }
+  }
+  const vfloat<N> rootEnter = Max(Max(F->e[0][0], F->e[0][1]), F->e[0][2]);
+  const vfloat<N> rootExit = Min(Min(F->x[1][0], F->x[1][1]), F->x[1][2]);
   unsigned live = lanes & (Max(rootEnter, P.tmin) <= Min(rootExit, H.t)).Bits();
   if (!live) return;
   if constexpr (kStats) st.nTS += PopCount(live);
@@ -303,55 +318,55 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
     OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[0], P, H, live, never, anyHit, mailbox, st);
     return;
   }
-  // The lanes of `in` that meet each child of F's node.
+  // Mirrored child m's widened entry: the largest of its axes' widened near
+  // parameters (bit a of m picks the node's near or mid one).
+  auto entry = [](const Frame& G, unsigned m) {
+    return Max(Max(G.e[m & 1u][0], G.e[(m >> 1) & 1u][1]), G.e[(m >> 2) & 1u][2]);
+  };
+  // The lanes of `in` that meet each stored child of G's node.
   auto enter = [&](Frame& G, unsigned in) {
-    const std::uint32_t mine = OctreeMirroredChildren(nodes[G.node].childMask, signMask);
-    for (int m = 0; m < 8; ++m) {
-      G.in[m] = 0;
-      if (!((mine >> m) & 1u)) continue;
-      const vfloat<N> ce = OctreeLoN<N>(
-          Max(Max((m & 1) ? G.tm[0] : G.t0[0], (m & 2) ? G.tm[1] : G.t0[1]), (m & 4) ? G.tm[2] : G.t0[2]));
-      const vfloat<N> cx = OctreeHiN<N>(
-          Min(Min((m & 1) ? G.t1[0] : G.tm[0], (m & 2) ? G.t1[1] : G.tm[1]), (m & 4) ? G.t1[2] : G.tm[2]));
-      G.in[m] = static_cast<std::uint8_t>(in & (Max(ce, P.tmin) <= Min(cx, H.t)).Bits());
+    unsigned mine = OctreeMirroredChildren(nodes[G.node].childMask, signMask), todo = 0u;
+    const vfloat<N> hitT = H.t;
+    for (; mine; mine &= mine - 1u) {
+      const unsigned m = static_cast<unsigned>(LowestBit(mine));
+      const vfloat<N> cx = Min(Min(G.x[m & 1u][0], G.x[(m >> 1) & 1u][1]), G.x[(m >> 2) & 1u][2]);
+      const unsigned meet = in & (Max(entry(G, m), P.tmin) <= Min(cx, hitT)).Bits();
+      G.in[m] = static_cast<std::uint8_t>(meet);
+      todo |= (meet != 0u ? 1u : 0u) << m;
     }
-    G.m = 0;
+    G.todo = todo;
   };
   F->node = 0u;
   enter(*F, live);
   for (;;) {
-    while (F->m < 8 && !(F->in[F->m] & live)) ++F->m;
-    if (F->m == 8) {
+    if (F->todo == 0u) {
       if (d == 0) return;
       F = &fr[--d];
       for (int a = 0; a < 3; ++a) c[a] >>= 1;
-      ++F->m;
       continue;
     }
-    const int m = F->m;
-    const vfloat<N> ce = OctreeLoN<N>(
-        Max(Max((m & 1) ? F->tm[0] : F->t0[0], (m & 2) ? F->tm[1] : F->t0[1]), (m & 4) ? F->tm[2] : F->t0[2]));
-    const unsigned vis = F->in[m] & live & (ce <= H.t).Bits();
-    if (!vis) {
-      ++F->m;
-      continue;
-    }
+    const unsigned m = static_cast<unsigned>(LowestBit(F->todo));
+    F->todo &= F->todo - 1u;
+    const unsigned vis = F->in[m] & live & (entry(*F, m) <= H.t).Bits();
+    if (!vis) continue;
     if constexpr (kStats) st.nTS += PopCount(vis);
-    const std::uint32_t o = std::uint32_t(m) ^ signMask;
+    const std::uint32_t o = m ^ signMask;
     const OctreeNode& n = nodes[F->node];
     const std::uint32_t ci = n.first + PopCount(n.childMask & ((1u << o) - 1u));
     if (nodes[ci].childMask == 0u) {
       live &= ~OctreePacket_Leaf<N, kTypes, kFast, kStats>(sc, nodes[ci], P, H, vis, never, anyHit, mailbox, st);
-      ++F->m;
       continue;
     }
     Frame* G = &fr[++d];
     for (int a = 0; a < 3; ++a) {
       c[a] = 2u * c[a] + ((o >> a) & 1u);
-      G->t0[a] = ((m >> a) & 1) ? F->tm[a] : F->t0[a];
-      G->t1[a] = ((m >> a) & 1) ? F->t1[a] : F->tm[a];
-      G->tm[a] = PlaneTN<N>(vfloat<N>(OctreePlane(hdr, a, static_cast<std::uint32_t>(d) + 1u, 2u * c[a] + 1u)),
-                            P.org[a], P.inv[a]);
+      const unsigned up = (m >> a) & 1u;
+      G->e[0][a] = F->e[up][a];
+      G->x[1][a] = F->x[up][a];
+      const vfloat<N> tm = PlaneTN<N>(
+          vfloat<N>(OctreePlane(hdr, a, static_cast<std::uint32_t>(d) + 1u, 2u * c[a] + 1u)), P.org[a], P.inv[a]);
+      G->e[1][a] = OctreeLoN<N>(tm);
+      G->x[0][a] = OctreeHiN<N>(tm);
     }
     G->node = ci;
     enter(*G, vis);

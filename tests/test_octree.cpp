@@ -569,37 +569,108 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
       TraceStatsSum classicSt;
       CreateTracer(scene, base)->Trace(rays, Tracer::NoTimes(), classicHits, occlusion, &classicSt);
       for (const char* mailbox : {"off", "on"}) {
-        TraceStatsSum scalarSt;
-        for (const OctreePath& p : paths) {
-          CAPTURE(std::string(p.name));
-          CAPTURE(occlusion);
-          CAPTURE(std::string(mailbox));
-          TraceConfig cfg = base;
-          cfg.backend = p.backend;
-          cfg.variant = p.variant;
-          cfg.params.octreeMargin = "ray";
-          cfg.params.octreeMailbox = mailbox;
-          std::vector<HitRecord> hits;
-          TraceStatsSum st;
-          CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits, occlusion, &st);
-          CHECK(ref::CheckHits(test::CachedReference(scene), rays, hits, occlusion, Tracer::NoTimes()).wrong == 0);
-          // Closest hits: the classic walk's, bit for bit. Any hit: hit or
-          // miss the same.
-          CHECK(test::CountDiffering(classicHits, hits, occlusion) == 0);
-          if (p.backend == Backend::Scalar) {
-            scalarSt = st;
-            MESSAGE(std::string(RayKindName(kind)), (occlusion ? " any hit" : " closest"), " mailbox ", std::string(mailbox),
-                    ": tests per ray, scene margins ", double(classicSt.nIT) / double(rays.size()), ", ray margins ",
-                    double(st.nIT) / double(rays.size()));
-            CHECK(st.nIT < classicSt.nIT);
-          }
-          if (p.statsAsScalar) {
-            CHECK(st.nIT == scalarSt.nIT);
-            CHECK(st.nTS == scalarSt.nTS);
-            CHECK(st.nLeaves == scalarSt.nLeaves);
+        for (const char* root : {"centre", "offset"}) {
+          TraceStatsSum scalarSt;
+          for (const OctreePath& p : paths) {
+            CAPTURE(std::string(p.name));
+            CAPTURE(occlusion);
+            CAPTURE(std::string(mailbox));
+            CAPTURE(std::string(root));
+            TraceConfig cfg = base;
+            cfg.backend = p.backend;
+            cfg.variant = p.variant;
+            cfg.params.octreeMargin = "ray";
+            cfg.params.octreeMailbox = mailbox;
+            cfg.params.octreeRoot = root;
+            std::vector<HitRecord> hits;
+            TraceStatsSum st;
+            CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits, occlusion, &st);
+            CHECK(ref::CheckHits(test::CachedReference(scene), rays, hits, occlusion, Tracer::NoTimes()).wrong == 0);
+            // Closest hits: the classic walk's, bit for bit. Any hit: hit or
+            // miss the same.
+            CHECK(test::CountDiffering(classicHits, hits, occlusion) == 0);
+            if (p.backend == Backend::Scalar) {
+              scalarSt = st;
+              MESSAGE(std::string(RayKindName(kind)), (occlusion ? " any hit" : " closest"), " mailbox ", std::string(mailbox),
+                      ": tests per ray, scene margins ", double(classicSt.nIT) / double(rays.size()), ", ray margins ",
+                      double(st.nIT) / double(rays.size()));
+              CHECK(st.nIT < classicSt.nIT);
+            }
+            if (p.statsAsScalar) {
+              CHECK(st.nIT == scalarSt.nIT);
+              CHECK(st.nTS == scalarSt.nTS);
+              CHECK(st.nLeaves == scalarSt.nLeaves);
+            }
           }
         }
       }
     }
   }
+}
+
+TEST_CASE("octree: --octree-root: an offset root spares the teapot in a stadium the chains its centre's planes cut, and auto keeps the root of lower cost")
+{
+  // The stadium's flake sits at the scene's centre: a centred root's mid
+  // planes cut it at every level, so rays descend several chains of nodes.
+  // At 0.45 of the root no plane passes within a tenth of a cell of it.
+  const Scene stadium = GenerateStadium(4);
+  AccelParams centre, offset, automatic;
+  centre.octreeMargin = offset.octreeMargin = automatic.octreeMargin = "ray";
+  centre.octreeRoot = "centre";
+  offset.octreeRoot = "offset";
+  AccelInfo ci, oi, ai;
+  const OctreeData c = BuildOctree(stadium, centre, ci);
+  const OctreeData o = BuildOctree(stadium, offset, oi);
+  const OctreeData a = BuildOctree(stadium, automatic, ai);
+  // The offset root: 1/0.9 of the centred one's side, the scene's centre at
+  // 0.45 of it on every axis.
+  CHECK(o.header.rootSize > 1.1f * c.header.rootSize);
+  CHECK(o.header.rootSize < 1.12f * c.header.rootSize);
+  const double costC = OctreeCost(stadium, c), costO = OctreeCost(stadium, o);
+  MESSAGE("stadium: cost centre ", costC, ", offset ", costO, "; ", ai.params);
+  CHECK(costO < 0.9 * costC);
+  CHECK(ai.params.find("root=auto:offset") != std::string::npos);
+  CHECK(a.nodes.size() == o.nodes.size());
+  CHECK(a.header.rootSize == o.header.rootSize);
+  // Fewer steps per primary ray, and the same answers.
+  const auto rays = test::MakeRays(stadium, RayKind::Primary, 64);
+  std::vector<HitRecord> hits[2];
+  TraceStatsSum st[2];
+  for (int k = 0; k < 2; ++k) {
+    TraceConfig cfg;
+    cfg.accel = AccelKind::Octree;
+    cfg.backend = Backend::Scalar;
+    cfg.stats = true;
+    cfg.params = k == 0 ? centre : offset;
+    CreateTracer(stadium, cfg)->Trace(rays, Tracer::NoTimes(), hits[k], false, &st[k]);
+    CHECK(ref::CheckHits(test::CachedReference(stadium), rays, hits[k], false, Tracer::NoTimes()).wrong == 0);
+  }
+  MESSAGE("stadium primary steps per ray: centre ", double(st[0].nTS) / double(rays.size()), ", offset ",
+          double(st[1].nTS) / double(rays.size()));
+  CHECK(double(st[1].nTS) < 0.75 * double(st[0].nTS));
+  CHECK(test::CountDiffering(hits[0], hits[1], false) == 0);
+
+  // Gears: the offset root costs more, and auto keeps the centred one.
+  const Scene& gears = test::CachedScene(test::SpdPath("gears"));
+  AccelInfo gi;
+  const OctreeData g = BuildOctree(gears, automatic, gi);
+  MESSAGE("gears: ", gi.params);
+  CHECK(gi.params.find("root=auto:centre") != std::string::npos);
+  AccelInfo gci;
+  const OctreeData gc = BuildOctree(gears, centre, gci);
+  CHECK(g.header.rootSize == gc.header.rootSize);
+  CHECK(g.nodes.size() == gc.nodes.size());
+
+  // The classic octree keeps its centred root and its description.
+  AccelInfo k0, k1;
+  AccelParams classicCentre;
+  classicCentre.octreeRoot = "centre";
+  const OctreeData classic = BuildOctree(stadium, AccelParams{}, k0);
+  const OctreeData classicExplicit = BuildOctree(stadium, classicCentre, k1);
+  CHECK(classic.header.rootSize == classicExplicit.header.rootSize);
+  CHECK(classic.nodes.size() == classicExplicit.nodes.size());
+  CHECK(k0.params.find("root=") == std::string::npos);
+  AccelParams bad;
+  bad.octreeRoot = "middle";
+  CHECK_THROWS_AS(BuildOctree(stadium, bad, k0), InputError);
 }

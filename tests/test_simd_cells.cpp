@@ -25,21 +25,24 @@ using namespace cr;
 
 namespace {
 
-// The structures, the octree with either margin (--octree-margin).
+// The structures, the octree with either margin (--octree-margin) and, with
+// the ray's, either root (--octree-root).
 struct CellStructure {
   AccelKind accel;
   AccelParams params;
   const char* name;
 };
-AccelParams OctreeRayMargin()
+AccelParams OctreeRayMargin(const char* root)
 {
   AccelParams p;
   p.octreeMargin = "ray";
+  p.octreeRoot = root;
   return p;
 }
 const CellStructure kCellAccels[] = {{AccelKind::Grid, {}, "grid"},
                                      {AccelKind::Octree, {}, "octree"},
-                                     {AccelKind::Octree, OctreeRayMargin(), "octree margin=ray"},
+                                     {AccelKind::Octree, OctreeRayMargin("centre"), "octree margin=ray"},
+                                     {AccelKind::Octree, OctreeRayMargin("offset"), "octree margin=ray root=offset"},
                                      {AccelKind::HGrid, {}, "hgrid"}};
 const char* const kVariants[] = {"packet", "single"};
 

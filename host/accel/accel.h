@@ -49,6 +49,10 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
     "Octree robustness: scene (the default, the classic octree: cells take their references with a margin " \
     "of the scene's size, which also bounds how small they get) or ray (cells without it, as deep as the " \
     "heuristic finds it pays, and a front-to-back search that widens each cell by the ray's own rounding)") \
+  X(octreeRoot, std::string, "--octree-root",                                                   \
+    "Octree root: centre (the scene's centre in the root's middle, where every level's mid planes cut it), " \
+    "offset (at 0.45 of the root's side, a root 1.11x the scene) or auto (both built, the lower surface area " \
+    "cost kept) (default: auto with --octree-margin ray, centre for the classic octree)")            \
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \
@@ -131,6 +135,9 @@ AccelData BuildAccel(const Scene& scene, AccelKind kind, const AccelParams& para
 
 GridData BuildGrid(const Scene& scene, const AccelParams& params, AccelInfo& info);
 OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo& info);
+// The surface area heuristic's expected cost, in primitive tests, of a random
+// ray through the scene's box in `tree` (--octree-root auto compares it).
+double OctreeCost(const Scene& scene, const OctreeData& tree);
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info);
 // Appends each node's parent to the references (after them; the header's
 // `parents` says where; node 0's is 0) for the stackless walk (kernels/bvh.h,
