@@ -661,6 +661,21 @@ TEST_CASE("octree: --octree-root: an offset root spares the teapot in a stadium 
   CHECK(g.header.rootSize == gc.header.rootSize);
   CHECK(g.nodes.size() == gc.nodes.size());
 
+  // Above 2^18 primitives auto compares the roots over a sample and builds
+  // the chosen one in full: the sphereflake of 597,873 spheres (at its
+  // centre, as the stadium's flake) keeps the offset root, the same tree as
+  // --octree-root offset's.
+  const Scene flake = GenerateSphereflake(6);
+  AccelInfo fi, foi;
+  const OctreeData f = BuildOctree(flake, automatic, fi);
+  const OctreeData fo = BuildOctree(flake, offset, foi);
+  MESSAGE("sphereflake 6: ", fi.params);
+  CHECK(fi.params.find("root=auto:offset") != std::string::npos);
+  CHECK(fi.params.find("1 in 3 primitives") != std::string::npos);
+  CHECK(f.header.rootSize == fo.header.rootSize);
+  CHECK(f.nodes.size() == fo.nodes.size());
+  CHECK(f.refs == fo.refs);
+
   // The classic octree keeps its centred root and its description.
   AccelInfo k0, k1;
   AccelParams classicCentre;
