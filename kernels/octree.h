@@ -60,7 +60,18 @@
 #define CR_OCTREE_MARGIN_BUILD 0
 #endif
 #define CR_OCTREE_USE_RAY_MARGIN(hdr) CR_OCTREE_MARGIN_BUILD
+/* Whether Octree_TraceRay keeps each level's parameters in private arrays
+ * (1: the host's choice on a CPU device) or recomputes them from the planes
+ * when it climbs back (0: on a GPU, where those arrays are scratch). */
+#ifndef CR_OCTREE_KEEP_FRAMES
+#define CR_OCTREE_KEEP_FRAMES 1
+#endif
 #else
+/* The scalar backend recomputes (the GPU's form; PoCL's programs keep them,
+ * and the tests compare the two bit for bit). */
+#ifndef CR_OCTREE_KEEP_FRAMES
+#define CR_OCTREE_KEEP_FRAMES 0
+#endif
 #define CR_OCTREE_USE_MAILBOX(hdr) (((hdr)->flags & CR_OCTREE_MAILBOX_ON) != 0u)
 #define CR_OCTREE_USE_RAY_MARGIN(hdr) (((hdr)->flags & CR_OCTREE_MARGIN_RAY) != 0u)
 #endif
@@ -168,24 +179,29 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
                              TraceStats* st)
 {
   uint c[3] = {0u, 0u, 0u};
-  /* Frame of level L: the node, the children still to visit, the node's
-   * parameters fT[9L ..] (t0, tm, t1) and each child's widened entry
-   * fEnter[8L + m]. Kept rather than recomputed from the planes on the way
-   * back up (the same values): on PoCL the stadium's primary rays take 35 ms
-   * with them, 58 without. On a GPU they are private arrays (scratch); this
-   * mode's programs are built apart (CR_OCTREE_MARGIN_BUILD). */
+  /* Frame of level L: the node and the children still to visit. With
+   * CR_OCTREE_KEEP_FRAMES also the node's parameters fT[9L ..] (t0, tm, t1)
+   * and each child's widened entry fEnter[8L + m], kept rather than
+   * recomputed from the planes on the way back up (the same values, bit for
+   * bit): on PoCL the stadium's primary rays take 35 ms with them, 58
+   * without; on a GPU they would be 1.4 KB of scratch per ray (gfx906:
+   * 1712-1728 bytes against 336-352), so a GPU's programs recompute. */
   uint fNode[CR_OCTREE_MAX_DEPTH], fTodo[CR_OCTREE_MAX_DEPTH];
+#if CR_OCTREE_KEEP_FRAMES
   real fT[9 * CR_OCTREE_MAX_DEPTH], fEnter[8 * CR_OCTREE_MAX_DEPTH];
+#endif
   int level = 0;
   uint ni = 0u;
   for (;;) {
     /* Node ni at `level` (coordinates c) with parameters t0, tm, t1. */
     {
+#if CR_OCTREE_KEEP_FRAMES
       CR_UNROLL for (int a = 0; a < 3; ++a) {
         fT[9 * level + a] = t0[a];
         fT[9 * level + 3 + a] = tm[a];
         fT[9 * level + 6 + a] = t1[a];
       }
+#endif
       CR_GLOBAL const OctreeNode* n = nodes + ni;
       uint todo = 0u;
       CR_UNROLL for (uint m = 0u; m < 8u; ++m) {
@@ -196,7 +212,9 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
             Octree_Hi(fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]));
         if (fmax(ce, ray->tmin) <= fmin(cx, hit->t)) {
           todo |= 1u << m;
+#if CR_OCTREE_KEEP_FRAMES
           fEnter[8 * level + (int)m] = ce;
+#endif
         }
       }
       fNode[level] = ni;
@@ -211,17 +229,27 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
         c[0] >>= 1;
         c[1] >>= 1;
         c[2] >>= 1;
+#if CR_OCTREE_KEEP_FRAMES
         CR_UNROLL for (int a = 0; a < 3; ++a) {
           t0[a] = fT[9 * level + a];
           tm[a] = fT[9 * level + 3 + a];
           t1[a] = fT[9 * level + 6 + a];
         }
+#else
+        Octree_CellT(hdr, ray, signMask, (uint)level, c, t0, tm, t1);
+#endif
         continue;
       }
       const uint m = cr_popcount((todo & (0u - todo)) - 1u); /* the lowest: Revelles' order */
       fTodo[level] = todo & (todo - 1u);
       /* Dropped when the closest hit lies before the child's entry. */
-      if (fEnter[8 * level + (int)m] > hit->t) continue;
+#if CR_OCTREE_KEEP_FRAMES
+      const real ce = fEnter[8 * level + (int)m];
+#else
+      const real ce =
+          Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
+#endif
+      if (ce > hit->t) continue;
       const uint o = m ^ signMask;
       CR_GLOBAL const OctreeNode* n = nodes + fNode[level];
       const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
