@@ -310,16 +310,19 @@ bool SweepVisits(Precision precision, const TypeSet& ts)
 // variant; `coldInline`: the cold paths inlined (CELLRAY_CL_COLD=inline, the
 // form offered for GPUs; host/cl/cl_options.cpp), with every type only (6
 // runs: the program that holds every cold path).
-void Sweep(Precision precision, const char* variant, bool coldInline = false)
+// `octreeArgs`: the octree alone, with every type, built and walked with
+// these structure options (the ray-margin octree's programs, built apart).
+void Sweep(Precision precision, const char* variant, bool coldInline = false, const char* octreeArgs = nullptr)
 {
   auto cache = test::OpenCLTestCacheDir();
   int runs = 0;
   for (const TypeSet& ts : kTypeSets) {
-    if (coldInline && &ts != &kEveryType) continue;
+    if ((coldInline || octreeArgs) && &ts != &kEveryType) continue;
     if (!SweepVisits(precision, ts)) continue;
     const Fixture& f = GetFixture(ts);
     for (AccelKind accel : kAccels)
       for (bool occlusion : {false, true}) {
+        if (octreeArgs && accel != AccelKind::Octree) continue;
         // Occlusion in robust mode only: the any-hit query is the same code
         // in every precision (the walk's early exit), which robust's sweep
         // runs on every set; fast and fp64 differ in their intersectors,
@@ -334,14 +337,15 @@ void Sweep(Precision precision, const char* variant, bool coldInline = false)
         if (std::string(variant) == "stackless" && (accel != AccelKind::BVH || &ts != &kEveryType)) continue;
         const std::string what = fmt::format("{} {} {}:4x4 {} {}", ts.name, AccelKindName(accel), variant,
                                              occlusion ? "occlusion" : "closest", PrecisionName(precision));
-        const std::string tag = fmt::format("{}-{}-{}-{}-{}{}", ts.name, AccelKindName(accel), variant,
+        const std::string tag = fmt::format("{}-{}-{}-{}-{}{}{}", ts.name, AccelKindName(accel), variant,
                                             occlusion ? "o" : "c", PrecisionName(precision),
-                                            coldInline ? "-inline" : "");
+                                            coldInline ? "-inline" : "", octreeArgs ? "-margin" : "");
         const std::string hitsPath = (Dir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(
-            fmt::format("trace {} --rays {} --backend opencl --accel {} --variant {}:4x4 --precision {}{} -o {}",
+            fmt::format("trace {} --rays {} --backend opencl --accel {} --variant {}:4x4 --precision {}{}{}{} -o {}",
                         f.scene, f.rays, AccelKindName(accel), variant, PrecisionName(precision),
-                        occlusion ? " --occlusion" : "", hitsPath),
+                        occlusion ? " --occlusion" : "", octreeArgs ? " " : "", octreeArgs ? octreeArgs : "",
+                        hitsPath),
             tag, false, BuildDir() / "test-cache" / "oclgrind", coldInline ? "CELLRAY_CL_COLD=inline " : "");
         ++runs;
         CheckClean(o, what);
@@ -353,7 +357,9 @@ void Sweep(Precision precision, const char* variant, bool coldInline = false)
       }
   }
   MESSAGE(runs, " configurations (", std::string(PrecisionName(precision)), ", ", std::string(variant),
-          std::string(coldInline ? ", cold paths inlined" : ""), ") under oclgrind");
+          std::string(coldInline ? ", cold paths inlined" : ""), std::string(octreeArgs ? ", " : ""),
+          std::string(octreeArgs ? octreeArgs : ""), ") under oclgrind");
+  CHECK(runs > 0);
 }
 
 }  // namespace
@@ -396,6 +402,17 @@ TEST_CASE("oclgrind: per-ray and packet kernels, robust, cold paths inlined, typ
 {
   Sweep(Precision::Robust, "ray", true);
   Sweep(Precision::Robust, "packet", true);
+}
+
+// The octree with the ray's margins: its own programs (CR_OCTREE_MARGIN_BUILD),
+// on Oclgrind (a "gpu" device) in the GPU's form, each level's parameters
+// recomputed from the planes (CR_OCTREE_KEEP_FRAMES=0); the answers PoCL's
+// classic octree gives (the same closest hits, the same occluded flags).
+TEST_CASE("oclgrind: the ray-margin octree (--octree-margin ray), per-ray and packet kernels, robust, every type x query" *
+          doctest::skip(NoOclgrind()))
+{
+  Sweep(Precision::Robust, "ray", false, "--octree-margin ray --octree-root offset");
+  Sweep(Precision::Robust, "packet", false, "--octree-margin ray --octree-root offset");
 }
 
 TEST_CASE("oclgrind: packet kernels, fp64, types stc bqhfg x structure, closest hits" * doctest::skip(NoOclgrind()))
