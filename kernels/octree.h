@@ -103,6 +103,17 @@ CR_FUNC void Octree_CellT(CR_GLOBAL const OctreeHeader* hdr, const Ray* ray, uin
   }
 }
 
+/* Entry and exit parameters of mirrored child m of a node with mirrored
+ * parameters t0, tm, t1: bit a of m picks the lower or upper half of axis a. */
+CR_FUNC real Octree_ChildEntry(uint m, const real t0[3], const real tm[3])
+{
+  return fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]);
+}
+CR_FUNC real Octree_ChildExit(uint m, const real tm[3], const real t1[3])
+{
+  return fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]);
+}
+
 /* Revelles' first child (mirrored octant) of a node entered at tStart: the
  * bit of an axis is set when its mid plane lies before tStart. */
 CR_FUNC uint Octree_FirstChild(const real tm[3], real tStart)
@@ -206,10 +217,8 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
       uint todo = 0u;
       CR_UNROLL for (uint m = 0u; m < 8u; ++m) {
         if (((n->childMask >> (m ^ signMask)) & 1u) == 0u) continue;
-        const real ce =
-            Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
-        const real cx =
-            Octree_Hi(fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]));
+        const real ce = Octree_Lo(Octree_ChildEntry(m, t0, tm));
+        const real cx = Octree_Hi(Octree_ChildExit(m, tm, t1));
         if (fmax(ce, ray->tmin) <= fmin(cx, hit->t)) {
           todo |= 1u << m;
 #if CR_OCTREE_KEEP_FRAMES
@@ -246,8 +255,7 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
 #if CR_OCTREE_KEEP_FRAMES
       const real ce = fEnter[8 * level + (int)m];
 #else
-      const real ce =
-          Octree_Lo(fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]));
+      const real ce = Octree_Lo(Octree_ChildEntry(m, t0, tm));
 #endif
       if (ce > hit->t) continue;
       const uint o = m ^ signMask;
@@ -324,8 +332,8 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   uint m = Octree_FirstChild(tm, fmax(rootEnter, ray->tmin)); /* current child, mirrored octant */
   for (;;) {
     /* Child m of node ni spans [ce, cx]. */
-    const real ce = fmax(fmax((m & 1u) ? tm[0] : t0[0], (m & 2u) ? tm[1] : t0[1]), (m & 4u) ? tm[2] : t0[2]);
-    const real cx = fmin(fmin((m & 1u) ? t1[0] : tm[0], (m & 2u) ? t1[1] : tm[1]), (m & 4u) ? t1[2] : tm[2]);
+    const real ce = Octree_ChildEntry(m, t0, tm);
+    const real cx = Octree_ChildExit(m, tm, t1);
     /* Front to back: every later cell starts at or after ce. */
     if (ce > hit->t) return;
     if (ce <= cx && cx >= ray->tmin) {

@@ -361,7 +361,6 @@ struct Candidate {
   OctreeData out;
   AccelInfo info;
   std::uint64_t nUnsplit = 0, nEmptyOctants = 0;
-  int reached = 0;
 };
 
 // stride > 1: over every stride-th primitive only (a sample, to compare roots).
@@ -398,7 +397,6 @@ Candidate BuildCandidate(const Scene& scene, int maxLeaf, int maxDepth, int sahD
   out.header.maxDepth = static_cast<std::uint32_t>(bld.reached.load());
   cand.nUnsplit = bld.nUnsplit.load();
   cand.nEmptyOctants = fl.nEmptyOctants;
-  cand.reached = bld.reached.load();
   return cand;
 }
 
