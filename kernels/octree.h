@@ -60,6 +60,9 @@
 #define CR_OCTREE_MARGIN_BUILD 0
 #endif
 #define CR_OCTREE_USE_RAY_MARGIN(hdr) CR_OCTREE_MARGIN_BUILD
+/* Leaf boxes come only with the ray's margins: the classic walk's programs
+ * hold no box test. */
+#define CR_OCTREE_USE_LEAF_BOXES(hdr) (CR_OCTREE_MARGIN_BUILD && ((hdr)->flags & CR_OCTREE_LEAF_BOXES) != 0u)
 /* Whether Octree_TraceRay keeps each level's parameters in private arrays
  * (1: the host's choice on a CPU device) or recomputes them from the planes
  * when it climbs back (0: on a GPU, where those arrays are scratch). */
@@ -74,6 +77,7 @@
 #endif
 #define CR_OCTREE_USE_MAILBOX(hdr) (((hdr)->flags & CR_OCTREE_MAILBOX_ON) != 0u)
 #define CR_OCTREE_USE_RAY_MARGIN(hdr) (((hdr)->flags & CR_OCTREE_MARGIN_RAY) != 0u)
+#define CR_OCTREE_USE_LEAF_BOXES(hdr) (((hdr)->flags & CR_OCTREE_LEAF_BOXES) != 0u)
 #endif
 
 /* Plane i (0 <= i <= 2^level) of `level` on `axis`:
@@ -140,14 +144,33 @@ CR_FUNC real Octree_Hi(real t)
   return t * (t > (real)0.0f ? (real)(1.0f + CR_OCTREE_WIDEN) : (real)(1.0f - CR_OCTREE_WIDEN)) + (real)0x1.0p-126f;
 }
 
+/* Whether the ray enters the box of leaf n (CR_OCTREE_LEAF_BOXES: the union
+ * of its primitives' bounds clipped to the cell, in the references before
+ * its own) within [tmin, Cull_Distance(hit t)], by the BVH's conservative
+ * slab test: a hit on one of the leaf's primitives inside the cell lies in
+ * the box, so a ray that misses the box has nothing to find there. */
+CR_FUNC int Octree_LeafBoxHit(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* refs, const Ray* ray, real hitT)
+{
+  real lo[3], hi[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    lo[a] = (real)cr_bits_float(refs[n->first - CR_OCTREE_BOX_WORDS + (uint)a]);
+    hi[a] = (real)cr_bits_float(refs[n->first - 3u + (uint)a]);
+  }
+  real tEnter;
+  return Box_Slabs(lo, hi, ray, ray->tmin, Cull_Distance(hitT), &tEnter);
+}
+
 /* Tests a leaf's references. Returns 1 when the query is answered: any hit
  * (anyHit), or a closest hit so far that lies within the leaf (t <= tExit).
- * A hit beyond tExit is kept, but a nearer one may lie in a later cell. */
+ * A hit beyond tExit is kept, but a nearer one may lie in a later cell.
+ * leafBox: the leaf has a box (CR_OCTREE_LEAF_BOXES), and a ray that misses
+ * it tests none of the references (the leaf still counts as visited). */
 CR_FUNC int Octree_Leaf(CR_GLOBAL const OctreeNode* n, CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray,
-                        Hit* hit, int anyHit, real tExit, uint* mailbox, int useMailbox, TraceStats* st)
+                        Hit* hit, int anyHit, real tExit, uint* mailbox, int useMailbox, int leafBox, TraceStats* st)
 {
   CR_COUNT(st, nLeaves);
   if (n->count == 0u) CR_COUNT(st, nEmptyLeaves);
+  if (leafBox && n->count != 0u && !Octree_LeafBoxHit(n, refs, ray, hit->t)) return hit->t <= tExit ? 1 : 0;
   const uint end = n->first + n->count;
   for (uint i = n->first; i < end; ++i) {
     const uint prim = refs[i];
@@ -189,6 +212,7 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
                              uint signMask, real t0[3], real tm[3], real t1[3], uint* mailbox, int useMailbox,
                              TraceStats* st)
 {
+  const int leafBox = CR_OCTREE_USE_LEAF_BOXES(hdr);
   uint c[3] = {0u, 0u, 0u};
   /* Frame of level L: the node and the children still to visit. With
    * CR_OCTREE_KEEP_FRAMES also the node's parameters fT[9L ..] (t0, tm, t1)
@@ -263,7 +287,8 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
       const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
       CR_COUNT(st, nTS);
       if (nodes[ci].childMask == 0u) {
-        if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, st)) return;
+        if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, -(real)CR_INF, mailbox, useMailbox, leafBox, st))
+          return;
         continue;
       }
       /* Descend: the child's near and far planes are the node's. */
@@ -318,7 +343,8 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
   if (useMailbox)
     CR_UNROLL for (int k = 0; k < CR_OCTREE_MAILBOX; ++k) mailbox[k] = CR_NO_HIT;
   if (nodes[0].childMask == 0u) {
-    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rayMargin ? -(real)CR_INF : rootExit, mailbox, useMailbox, st);
+    Octree_Leaf(nodes, refs, pv, ray, hit, anyHit, rayMargin ? -(real)CR_INF : rootExit, mailbox, useMailbox,
+                CR_OCTREE_USE_LEAF_BOXES(hdr), st);
     return;
   }
   if (rayMargin) {
@@ -348,7 +374,7 @@ CR_FUNC void Octree_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const Oct
       } else {
         const uint ci = n->first + cr_popcount(n->childMask & ((1u << o) - 1u));
         if (nodes[ci].childMask == 0u) {
-          if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, cx, mailbox, useMailbox, st)) return;
+          if (Octree_Leaf(nodes + ci, refs, pv, ray, hit, anyHit, cx, mailbox, useMailbox, 0, st)) return;
         } else {
           /* Descend. The child's near and far planes are planes of the
            * parent (same values, bit for bit); only its mid planes are new. */

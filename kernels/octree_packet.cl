@@ -154,11 +154,19 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
         enter |= hit << (m ^ signMask);
       }
       enter = in ? enter & childMask : 0u;
-      sLane[lid] = enter | ((uint)in << 8) | (signMask << 9) | ((uint)live << 12);
 #ifdef CR_STATS
       st->nTS += (uint)in;
       st->nLeaves += (uint)in & (childMask == 0u ? 1u : 0u);
 #endif
+#if CR_OCTREE_MARGIN_BUILD
+      /* A leaf with a box (CR_OCTREE_LEAF_BOXES): only the lanes entering
+       * it test its references (Octree_Leaf). */
+      if (childMask == 0u && CR_OCTREE_USE_LEAF_BOXES(hdr)) {
+        CR_GLOBAL const OctreeNode* leaf = nodes + sState[0];
+        if (in && leaf->count != 0u) in = Octree_LeafBoxHit(leaf, refs, &ray, hitT);
+      }
+#endif
+      sLane[lid] = enter | ((uint)in << 8) | (signMask << 9) | ((uint)live << 12);
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     /* Step 2, lane 0: push the children some lane entered, pop the next

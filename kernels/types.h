@@ -294,8 +294,12 @@ typedef struct {
 /* Octree node, 16 bytes. childMask != 0: interior node; its non-empty children
  * are stored in octant order starting at `first`, child of octant o at
  * first + popcount(childMask & ((1 << o) - 1)); octant bit 0 is +x, 1 is +y,
- * 2 is +z. childMask == 0: leaf with references [first, first + count).
- * `depth` is informative (the level of the node, root 0). */
+ * 2 is +z. childMask == 0: leaf with references [first, first + count);
+ * with CR_OCTREE_LEAF_BOXES in the header's flags a leaf with count > 0 is
+ * preceded in the references by its box, refs[first - 6 .. first): lo x y z,
+ * hi x y z as float bits (the union of its primitives' bounds clipped to the
+ * cell, rounded outward). `depth` is informative (the level of the node,
+ * root 0). */
 typedef struct {
   uint first;
   uint count;
@@ -309,7 +313,10 @@ typedef struct {
  * primitive the ray has tested in an earlier leaf, kernels/octree.h);
  * CR_OCTREE_MARGIN_RAY (--octree-margin ray: cells take their references
  * without the scene-relative padding, and the walks widen each cell's
- * parameter interval by the ray's own rounding instead, Octree_TraceRay). */
+ * parameter interval by the ray's own rounding instead, Octree_TraceRay);
+ * CR_OCTREE_LEAF_BOXES (--octree-leaf-box on, with the ray's margins: each
+ * leaf's box precedes its references, and the walks test a leaf's
+ * primitives only for rays that enter the box, Octree_Leaf). */
 typedef struct {
   float rootMin[3];
   float rootSize;
@@ -320,6 +327,9 @@ typedef struct {
 } OctreeHeader;
 #define CR_OCTREE_MAILBOX_ON 1u
 #define CR_OCTREE_MARGIN_RAY 2u
+#define CR_OCTREE_LEAF_BOXES 4u
+/* Words of a leaf's box in the references (CR_OCTREE_LEAF_BOXES). */
+#define CR_OCTREE_BOX_WORDS 6u
 /* Entries of the octree walk's mailbox when it is on (a power of two). */
 #define CR_OCTREE_MAILBOX 8
 

@@ -21,6 +21,9 @@
 // on) each lane keeps its own, as Octree_Trace does.
 #pragma once
 
+#include <bit>
+#include <cmath>
+
 #include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
 #include "simd/prim_range.h"
@@ -119,6 +122,31 @@ CR_SIMD_INLINE void OctreeFrame_Advance(OctreeFrame<N>& F, unsigned lanes)
   F.cur = Select(move, vint<N>(m) + bit, F.cur);
 }
 
+// A leaf's box (CR_OCTREE_LEAF_BOXES: the six float words before its
+// references, kernels/types.h).
+CR_SIMD_INLINE void OctreeLeafBox(const KernelScene& sc, const OctreeNode& n, float box[6])
+{
+  for (std::uint32_t i = 0; i < CR_OCTREE_BOX_WORDS; ++i)
+    box[i] = std::bit_cast<float>(sc.octreeRefs[n.first - CR_OCTREE_BOX_WORDS + i]);
+}
+// Octree_LeafBoxHit for one ray: Box_Slabs' operations in its order.
+template <bool kFast>
+CR_SIMD_INLINE bool OctreeLeafBox_Hit(const KernelScene& sc, const OctreeNode& n, const Ray& ray, float hitT)
+{
+  float box[6];
+  OctreeLeafBox(sc, n, box);
+  float boxNear = -__builtin_inff(), boxFar = __builtin_inff();
+  for (int a = 0; a < 3; ++a) {
+    const float lo = (box[a] - ray.org[a]) * ray.inv[a];
+    const float hi = (box[3 + a] - ray.org[a]) * ray.inv[a];
+    const bool neg = ray.inv[a] < 0.0f;
+    boxNear = std::fmax(boxNear, neg ? hi : lo);
+    boxFar = std::fmin(boxFar, neg ? lo : hi);
+  }
+  if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
+  return std::fmax(ray.tmin, boxNear) <= std::fmin(CullDistance<kFast>(hitT), boxFar);
+}
+
 // Octree_Leaf for the lanes of `lanes`: tests the references, and returns
 // the lanes whose query is answered (an occluder, or a closest hit so far at
 // or before the leaf's exit cx).
@@ -137,14 +165,24 @@ __attribute__((noinline)) unsigned OctreePacket_Leaf(const KernelScene& sc, cons
     if (n.count == 0u) st.nEmptyLeaves += PopCount(lanes);
   }
   unsigned done = 0;
-  if (n.count) {
+  // The lanes that test the references: with leaf boxes, those entering it.
+  unsigned test = n.count ? lanes : 0u;
+  if (test && (sc.octreeHeader->flags & CR_OCTREE_LEAF_BOXES)) {
+    float box[6];
+    OctreeLeafBox(sc, n, box);
+    vfloat<N> tEnter;
+    test &= Box_IntersectRays<kFast, N>(box, box + 3, P.org, P.inv, P.invNeg, P.tmin, CullDistance<kFast, N>(H.t),
+                                        tEnter)
+                .Bits();
+  }
+  if (test) {
     const std::uint32_t begin = n.first, end = n.first + n.count;
     if (mailbox)
       MailboxPacketRefs_Intersect<N, CR_OCTREE_MAILBOX, kTypes, kFast, kStats>(
-          sc, sc.octreeRefs, begin, end, mailbox, P, H, vbool<N>::FromBits(lanes), anyHit, done, st,
+          sc, sc.octreeRefs, begin, end, mailbox, P, H, vbool<N>::FromBits(test), anyHit, done, st,
           [&](int l) { return PackRay_OfLane<N, kHasMotion<kTypes>>(P, l, anyHit); });
     else
-      CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end, P, H, vbool<N>::FromBits(lanes),
+      CellRefs_Intersect<N, kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end, P, H, vbool<N>::FromBits(test),
                                                    anyHit, done, st);
   }
   return done | (lanes & (H.t <= cx).Bits());

@@ -173,6 +173,7 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
   pr.anyHit = anyHit != 0;
   // The mailbox (--octree-mailbox on; kernels/octree.h).
   const bool useMailbox = (hdr.flags & CR_OCTREE_MAILBOX_ON) != 0u;
+  const bool leafBoxes = (hdr.flags & CR_OCTREE_LEAF_BOXES) != 0u;
   std::uint32_t mailbox[CR_OCTREE_MAILBOX];
   if (useMailbox)
     for (std::uint32_t& k : mailbox) k = CR_NO_HIT;
@@ -182,6 +183,7 @@ CR_SIMD_INLINE void OctreeSingle_Trace(const KernelScene& sc, const Ray& ray, Hi
       ++st.nLeaves;
       if (n.count == 0u) ++st.nEmptyLeaves;
     }
+    if (leafBoxes && n.count && !OctreeLeafBox_Hit<kFast>(sc, n, ray, hit.t)) return hit.t <= tExit;
     const std::uint32_t begin = n.first, end = n.first + n.count;
     if (useMailbox ? MailboxRefs_Intersect<CR_OCTREE_MAILBOX, kTypes, kFast, kStats>(sc, sc.octreeRefs, begin, end,
                                                                                      mailbox, 1, pr, hit, anyHit, st)

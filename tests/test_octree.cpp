@@ -548,14 +548,68 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
   ray.octreeMargin = "ray";
   const OctreeData classic = BuildOctree(scene, AccelParams{}, classicInfo);
   const OctreeData tree = BuildOctree(scene, ray, info);
-  CHECK(tree.header.flags == CR_OCTREE_MARGIN_RAY);
-  CHECK(info.params.find("margin=ray") != std::string::npos);
+  CHECK(tree.header.flags == (CR_OCTREE_MARGIN_RAY | CR_OCTREE_LEAF_BOXES));
+  CHECK(info.params.find("margin=ray leaf_box=on") != std::string::npos);
   // Without the scene's padding fewer cells take each primitive.
-  MESSAGE("references: scene margins ", classic.refs.size(), ", ray margins ", tree.refs.size());
-  CHECK(tree.refs.size() < classic.refs.size());
+  MESSAGE("references: scene margins ", classicInfo.refs, ", ray margins ", info.refs);
+  CHECK(info.refs < classicInfo.refs);
+  CHECK(classic.refs.size() == classicInfo.refs);
   AccelParams bad;
   bad.octreeMargin = "cell";
   CHECK_THROWS_AS(BuildOctree(scene, bad, info), InputError);
+  // Leaf boxes: each non-empty leaf's six words before its references hold
+  // a box inside its cell that holds every primitive's bounds clipped to the
+  // cell; off, the references are as they were, without boxes.
+  {
+    std::size_t boxes = 0, checked = 0;
+    auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, std::array<std::uint32_t, 3> c) -> void {
+      const OctreeNode& nd = tree.nodes[ni];
+      if (nd.childMask == 0u) {
+        if (nd.count == 0u) return;
+        REQUIRE(nd.first >= CR_OCTREE_BOX_WORDS);
+        float box[6];
+        for (std::uint32_t i = 0; i < 6; ++i)
+          box[i] = std::bit_cast<float>(tree.refs[nd.first - CR_OCTREE_BOX_WORDS + i]);
+        ++boxes;
+        for (int a = 0; a < 3; ++a) {
+          const float clo = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a]);
+          const float chi = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u);
+          CHECK(box[a] <= box[3 + a]);
+          // Inside the cell (grown by at most the builder's rounding).
+          CHECK(box[a] >= clo - 1e-3f * (chi - clo));
+          CHECK(box[3 + a] <= chi + 1e-3f * (chi - clo));
+          for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+            const Bounds b = scene.UnifiedBounds(tree.refs[i]);
+            CHECK(box[a] <= std::max(b.lo[a], clo));
+            CHECK(box[3 + a] >= std::min(b.hi[a], chi));
+            ++checked;
+          }
+        }
+        return;
+      }
+      std::uint32_t k = 0;
+      for (std::uint32_t o = 0; o < 8; ++o)
+        if ((nd.childMask >> o) & 1u)
+          self(self, nd.first + k++, level + 1u,
+               {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
+    };
+    visit(visit, 0u, 0u, {0u, 0u, 0u});
+    MESSAGE("leaf boxes: ", boxes, ", primitive bounds checked against them: ", checked);
+    CHECK(boxes > 100u);
+    CHECK(tree.refs.size() == info.refs + CR_OCTREE_BOX_WORDS * boxes);
+    AccelParams noBox = ray;
+    noBox.octreeLeafBox = "off";
+    AccelInfo noBoxInfo;
+    const OctreeData plain = BuildOctree(scene, noBox, noBoxInfo);
+    CHECK(plain.header.flags == CR_OCTREE_MARGIN_RAY);
+    CHECK(plain.refs.size() == info.refs);
+    CHECK(noBoxInfo.params.find("leaf_box=off") != std::string::npos);
+    AccelParams classicBox;
+    classicBox.octreeLeafBox = "on";
+    CHECK_THROWS_AS(BuildOctree(scene, classicBox, noBoxInfo), InputError);
+    noBox.octreeLeafBox = "yes";
+    CHECK_THROWS_AS(BuildOctree(scene, noBox, noBoxInfo), InputError);
+  }
 
   const auto clCache = test::OpenCLTestCacheDir();
   const std::vector<OctreePath> paths = OctreePaths();
@@ -568,20 +622,32 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
       std::vector<HitRecord> classicHits;
       TraceStatsSum classicSt;
       CreateTracer(scene, base)->Trace(rays, Tracer::NoTimes(), classicHits, occlusion, &classicSt);
-      for (const char* mailbox : {"off", "on"}) {
-        for (const char* root : {"centre", "offset"}) {
+      // (mailbox, root, leaf boxes); the last without boxes, to compare
+      // the tests per ray with the second.
+      struct Combo {
+        const char *mailbox, *root, *leafBox;
+      };
+      const Combo combos[] = {{"off", "centre", "on"}, {"off", "offset", "on"}, {"on", "centre", "on"},
+                              {"on", "offset", "on"}, {"off", "offset", "off"}};
+      TraceStatsSum boxedSt;
+      for (const Combo& combo : combos) {
+        const char* mailbox = combo.mailbox;
+        const char* root = combo.root;
+        {
           TraceStatsSum scalarSt;
           for (const OctreePath& p : paths) {
             CAPTURE(std::string(p.name));
             CAPTURE(occlusion);
             CAPTURE(std::string(mailbox));
             CAPTURE(std::string(root));
+            CAPTURE(std::string(combo.leafBox));
             TraceConfig cfg = base;
             cfg.backend = p.backend;
             cfg.variant = p.variant;
             cfg.params.octreeMargin = "ray";
             cfg.params.octreeMailbox = mailbox;
             cfg.params.octreeRoot = root;
+            cfg.params.octreeLeafBox = combo.leafBox;
             std::vector<HitRecord> hits;
             TraceStatsSum st;
             CreateTracer(scene, cfg)->Trace(rays, Tracer::NoTimes(), hits, occlusion, &st);
@@ -592,9 +658,18 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
             if (p.backend == Backend::Scalar) {
               scalarSt = st;
               MESSAGE(std::string(RayKindName(kind)), (occlusion ? " any hit" : " closest"), " mailbox ", std::string(mailbox),
-                      ": tests per ray, scene margins ", double(classicSt.nIT) / double(rays.size()), ", ray margins ",
-                      double(st.nIT) / double(rays.size()));
+                      " leaf boxes ", std::string(combo.leafBox), ": tests per ray, scene margins ",
+                      double(classicSt.nIT) / double(rays.size()), ", ray margins ", double(st.nIT) / double(rays.size()));
               CHECK(st.nIT < classicSt.nIT);
+              // The leaf boxes spare closest-hit queries tests, not steps
+              // (an any-hit query may find its occluder sooner without them:
+              // a primitive hit beyond the cell it was met in).
+              if (&combo == &combos[1]) boxedSt = st;
+              if (&combo == &combos[4] && !occlusion) {
+                CHECK(boxedSt.nIT < st.nIT);
+                CHECK(boxedSt.nTS == st.nTS);
+                CHECK(boxedSt.nLeaves == st.nLeaves);
+              }
             }
             if (p.statsAsScalar) {
               CHECK(st.nIT == scalarSt.nIT);

@@ -53,6 +53,9 @@ std::string AccelKindNames();  // the command-line names, comma-separated: for h
     "Octree root: centre (the scene's centre in the root's middle, where every level's mid planes cut it), " \
     "offset (at 0.45 of the root's side, a root 1.11x the scene) or auto (both built, the lower surface area " \
     "cost kept) (default: auto with --octree-margin ray, centre for the classic octree)")            \
+  X(octreeLeafBox, std::string, "--octree-leaf-box",                                            \
+    "Octree leaves with --octree-margin ray: on (the default: each leaf keeps the box of its primitives " \
+    "clipped to its cell, and a ray that misses the box tests none of them) or off")               \
   X(bvhLeaf, int, "--bvh-leaf", "Max primitives per BVH leaf")                                 \
   X(bvhQuality, std::string, "--bvh-quality",                                                   \
     "BVH build: medium (binned SAH) or high (binned SAH with spatial splits, SBVH)")                 \

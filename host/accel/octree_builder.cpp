@@ -361,7 +361,68 @@ struct Candidate {
   OctreeData out;
   AccelInfo info;
   std::uint64_t nUnsplit = 0, nEmptyOctants = 0;
+  double pad = 0.0;  // the cells' growth when they took their references
 };
+
+// --octree-leaf-box: puts each non-empty leaf's box before its references
+// (CR_OCTREE_BOX_WORDS words, kernels/types.h): the union of its
+// primitives' bounds (conservative floats) clipped to its cell grown by
+// `pad`, as the cell took them, rounded outward. A hit inside the cell lies
+// on a primitive of the leaf and in the cell, so in the box. Returns the
+// number of boxes.
+std::uint64_t AddLeafBoxes(const Scene& scene, OctreeData& tree, double pad)
+{
+  std::vector<std::uint32_t> refs;
+  refs.reserve(tree.refs.size() + tree.nodes.size() * CR_OCTREE_BOX_WORDS);
+  std::uint64_t boxes = 0;
+  auto down = [](double x) {
+    float f = static_cast<float>(x);
+    return double(f) > x ? std::nextafter(f, -INFINITY) : f;
+  };
+  auto up = [](double x) {
+    float f = static_cast<float>(x);
+    return double(f) < x ? std::nextafter(f, INFINITY) : f;
+  };
+  auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) -> void {
+    OctreeNode& nd = tree.nodes[ni];
+    if (nd.childMask == 0u) {
+      const std::uint32_t first = nd.first, count = nd.count;
+      if (count > 0u) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (std::uint32_t i = first; i < first + count; ++i) {
+          const Bounds b = scene.UnifiedBounds(tree.refs[i]);
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], double(b.lo[a]));
+            hi[a] = std::max(hi[a], double(b.hi[a]));
+          }
+        }
+        float box[6];
+        for (int a = 0; a < 3; ++a) {
+          const double clo = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a])) - pad;
+          const double chi = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u)) + pad;
+          box[a] = down(std::max(lo[a], clo));
+          box[3 + a] = up(std::min(hi[a], chi));
+        }
+        for (float f : box) refs.push_back(std::bit_cast<std::uint32_t>(f));
+        ++boxes;
+      }
+      nd.first = static_cast<std::uint32_t>(refs.size());
+      refs.insert(refs.end(), tree.refs.begin() + first, tree.refs.begin() + first + count);
+      return;
+    }
+    std::uint32_t k = 0;
+    const std::uint32_t kids = nd.first;
+    for (std::uint32_t o = 0; o < 8; ++o)
+      if ((nd.childMask >> o) & 1u)
+        self(self, kids + k++, level + 1u,
+             {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
+  };
+  visit(visit, 0u, 0u, {0u, 0u, 0u});
+  if (refs.size() > 0xFFFFFFFFull) throw RuntimeError("octree: the leaf boxes exceed 32-bit reference indices");
+  tree.refs = std::move(refs);
+  tree.header.nRefs = static_cast<std::uint32_t>(tree.refs.size());
+  return boxes;
+}
 
 // stride > 1: over every stride-th primitive only (a sample, to compare roots).
 Candidate BuildCandidate(const Scene& scene, int maxLeaf, int maxDepth, int sahDepth, bool sah, double padRel,
@@ -397,6 +458,7 @@ Candidate BuildCandidate(const Scene& scene, int maxLeaf, int maxDepth, int sahD
   out.header.maxDepth = static_cast<std::uint32_t>(bld.reached.load());
   cand.nUnsplit = bld.nUnsplit.load();
   cand.nEmptyOctants = fl.nEmptyOctants;
+  cand.pad = bld.pad;
   return cand;
 }
 
@@ -419,6 +481,12 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   if (!margin.empty() && margin != "scene" && margin != "ray")
     throw InputError(fmt::format("--octree-margin '{}': expected scene or ray", margin));
   const bool rayMargin = margin == "ray";
+  const std::string& lb = params.octreeLeafBox;
+  if (!lb.empty() && lb != "on" && lb != "off")
+    throw InputError(fmt::format("--octree-leaf-box '{}': expected on or off", lb));
+  if (lb == "on" && !rayMargin)
+    throw InputError("--octree-leaf-box on needs --octree-margin ray (the classic octree is the baseline, as it was)");
+  const bool leafBoxes = rayMargin && lb != "off";
   const int maxLeaf = sah ? 0 : params.octreeLeaf > 0 ? params.octreeLeaf : kDefaultLeaf;
   // An explicit --octree-depth is a hard limit; by default a leaf rule node
   // splits freely down to kDefaultDepth and beyond only by the heuristic.
@@ -456,12 +524,14 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   OctreeData out = std::move(cand.out);
   info.leaves = cand.info.leaves;
   info.emptyLeaves = cand.info.emptyLeaves;
-  out.header.flags = (mailbox ? CR_OCTREE_MAILBOX_ON : 0u) | (rayMargin ? CR_OCTREE_MARGIN_RAY : 0u);
+  out.header.flags = (mailbox ? CR_OCTREE_MAILBOX_ON : 0u) | (rayMargin ? CR_OCTREE_MARGIN_RAY : 0u) |
+                     (leafBoxes ? CR_OCTREE_LEAF_BOXES : 0u);
+  const std::uint64_t nBoxes = leafBoxes ? AddLeafBoxes(scene, out, cand.pad) : 0u;
 
   info.nodes = out.nodes.size();
   info.leaves += cand.nEmptyOctants;
   info.emptyLeaves += cand.nEmptyOctants;
-  info.refs = out.refs.size();
+  info.refs = out.refs.size() - nBoxes * CR_OCTREE_BOX_WORDS;
   info.bytes = sizeof(OctreeHeader) + out.nodes.size() * sizeof(OctreeNode) + out.refs.size() * sizeof(std::uint32_t);
   // The classic octree's description is as it was; any other names its root.
   if (!rayMargin && rootHow.empty()) rootNote.clear();
@@ -470,7 +540,8 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
                             sah || sahDepth == maxDepth ? fmt::to_string(maxDepth)
                                                         : fmt::format("{}+sah..{}", sahDepth, maxDepth),
                             out.header.maxDepth, cand.nUnsplit, mailbox ? " mailbox=on" : "",
-                            rayMargin ? " margin=ray" : "", rootNote.empty() ? "" : " root=" + rootNote,
+                            rayMargin ? (leafBoxes ? " margin=ray leaf_box=on" : " margin=ray leaf_box=off") : "",
+                            rootNote.empty() ? "" : " root=" + rootNote,
                             cand.nEmptyOctants);
   return out;
 }
