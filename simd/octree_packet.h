@@ -22,7 +22,6 @@
 #pragma once
 
 #include <bit>
-#include <cmath>
 
 #include "simd/bvh_packet.h"
 #include "simd/kernel_common.h"
@@ -140,11 +139,15 @@ CR_SIMD_INLINE bool OctreeLeafBox_Hit(const KernelScene& sc, const OctreeNode& n
     const float lo = (box[a] - ray.org[a]) * ray.inv[a];
     const float hi = (box[3 + a] - ray.org[a]) * ray.inv[a];
     const bool neg = ray.inv[a] < 0.0f;
-    boxNear = std::fmax(boxNear, neg ? hi : lo);
-    boxFar = std::fmin(boxFar, neg ? lo : hi);
+    // fmaxf(boxNear, n) and fminf(boxFar, f) without a call: n or f is NaN
+    // on a plane-parallel ray from the plane (0 * inf), and keeps the other.
+    const float n = neg ? hi : lo, f = neg ? lo : hi;
+    boxNear = n > boxNear ? n : boxNear;
+    boxFar = f < boxFar ? f : boxFar;
   }
   if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
-  return std::fmax(ray.tmin, boxNear) <= std::fmin(CullDistance<kFast>(hitT), boxFar);
+  const float tn = boxNear > ray.tmin ? boxNear : ray.tmin, cull = CullDistance<kFast>(hitT);
+  return tn <= (boxFar < cull ? boxFar : cull);
 }
 
 // Octree_Leaf for the lanes of `lanes`: tests the references, and returns

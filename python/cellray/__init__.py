@@ -158,7 +158,7 @@ class Scene:
                isa=None, stats=False, **structure_params) -> "Tracer":
         """Builds a structure (grid, octree, bvh, hgrid) for a backend (reference, scalar, simd, opencl, embree,
         auto) at a precision (fast, robust, fp64). structure_params: grid_density, octree_leaf, octree_depth,
-        octree_build, octree_mailbox, octree_margin, octree_root, bvh_leaf, bvh_quality, bvh_sah_block, hgrid_top_density,
+        octree_build, octree_mailbox, octree_margin, octree_root, octree_leaf_box, bvh_leaf, bvh_quality, bvh_sah_block, hgrid_top_density,
         hgrid_density, hgrid_leaf, hgrid_skip (the CLI's options).
         stats=True gathers Havran's per-ray measures over the calls (Tracer.stats())."""
         return Tracer(_cellray.Tracer(self._s, accel, backend, precision, device, int(threads), variant, isa,
