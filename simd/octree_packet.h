@@ -141,9 +141,9 @@ CR_SIMD_INLINE bool OctreeLeafBox_Hit(const KernelScene& sc, const OctreeNode& n
     const bool neg = ray.inv[a] < 0.0f;
     // fmaxf(boxNear, n) and fminf(boxFar, f) without a call: n or f is NaN
     // on a plane-parallel ray from the plane (0 * inf), and keeps the other.
-    const float n = neg ? hi : lo, f = neg ? lo : hi;
-    boxNear = n > boxNear ? n : boxNear;
-    boxFar = f < boxFar ? f : boxFar;
+    const float tNear = neg ? hi : lo, tFar = neg ? lo : hi;
+    boxNear = tNear > boxNear ? tNear : boxNear;
+    boxFar = tFar < boxFar ? tFar : boxFar;
   }
   if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
   const float tn = boxNear > ray.tmin ? boxNear : ray.tmin, cull = CullDistance<kFast>(hitT);
