@@ -562,38 +562,28 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
   // cell; off, the references are as they were, without boxes.
   {
     std::size_t boxes = 0, checked = 0;
-    auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, std::array<std::uint32_t, 3> c) -> void {
+    ForEachOctreeNode(tree, [&](std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) {
       const OctreeNode& nd = tree.nodes[ni];
-      if (nd.childMask == 0u) {
-        if (nd.count == 0u) return;
-        REQUIRE(nd.first >= CR_OCTREE_BOX_WORDS);
-        float box[6];
-        for (std::uint32_t i = 0; i < 6; ++i)
-          box[i] = std::bit_cast<float>(tree.refs[nd.first - CR_OCTREE_BOX_WORDS + i]);
-        ++boxes;
-        for (int a = 0; a < 3; ++a) {
-          const float clo = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a]);
-          const float chi = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u);
-          CHECK(box[a] <= box[3 + a]);
-          // Inside the cell (grown by at most the builder's rounding).
-          CHECK(box[a] >= clo - 1e-3f * (chi - clo));
-          CHECK(box[3 + a] <= chi + 1e-3f * (chi - clo));
-          for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
-            const Bounds b = scene.UnifiedBounds(tree.refs[i]);
-            CHECK(box[a] <= std::max(b.lo[a], clo));
-            CHECK(box[3 + a] >= std::min(b.hi[a], chi));
-            ++checked;
-          }
+      if (nd.childMask != 0u || nd.count == 0u) return;
+      REQUIRE(nd.first >= CR_OCTREE_BOX_WORDS);
+      float box[6];
+      for (std::uint32_t i = 0; i < 6; ++i) box[i] = std::bit_cast<float>(tree.refs[nd.first - CR_OCTREE_BOX_WORDS + i]);
+      ++boxes;
+      for (int a = 0; a < 3; ++a) {
+        const float clo = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a]);
+        const float chi = octree_test_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u);
+        CHECK(box[a] <= box[3 + a]);
+        // Inside the cell (grown by at most the builder's rounding).
+        CHECK(box[a] >= clo - 1e-3f * (chi - clo));
+        CHECK(box[3 + a] <= chi + 1e-3f * (chi - clo));
+        for (std::uint32_t i = nd.first; i < nd.first + nd.count; ++i) {
+          const Bounds b = scene.UnifiedBounds(tree.refs[i]);
+          CHECK(box[a] <= std::max(b.lo[a], clo));
+          CHECK(box[3 + a] >= std::min(b.hi[a], chi));
+          ++checked;
         }
-        return;
       }
-      std::uint32_t k = 0;
-      for (std::uint32_t o = 0; o < 8; ++o)
-        if ((nd.childMask >> o) & 1u)
-          self(self, nd.first + k++, level + 1u,
-               {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
-    };
-    visit(visit, 0u, 0u, {0u, 0u, 0u});
+    });
     MESSAGE("leaf boxes: ", boxes, ", primitive bounds checked against them: ", checked);
     CHECK(boxes > 100u);
     CHECK(tree.refs.size() == info.refs + CR_OCTREE_BOX_WORDS * boxes);

@@ -4,7 +4,9 @@
 // node array and the references (<Name>Data: header, Nodes(), refs).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -141,6 +143,10 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
 // The surface area heuristic's expected cost, in primitive tests, of a random
 // ray through the scene's box in `tree` (--octree-root auto compares it).
 double OctreeCost(const Scene& scene, const OctreeData& tree);
+// Every node of an octree, each before its children: fn(node index, level,
+// the cell's integer coordinates at that level).
+void ForEachOctreeNode(const OctreeData& tree,
+                       const std::function<void(std::uint32_t, std::uint32_t, const std::array<std::uint32_t, 3>&)>& fn);
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info);
 // Appends each node's parent to the references (after them; the header's
 // `parents` says where; node 0's is 0) for the stackless walk (kernels/bvh.h,

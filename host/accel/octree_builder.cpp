@@ -314,6 +314,22 @@ struct Flattener {
 
 }  // namespace
 
+void ForEachOctreeNode(const OctreeData& tree,
+                       const std::function<void(std::uint32_t, std::uint32_t, const std::array<std::uint32_t, 3>&)>& fn)
+{
+  if (tree.nodes.empty()) return;
+  auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) -> void {
+    fn(ni, level, c);
+    const OctreeNode& nd = tree.nodes[ni];
+    std::uint32_t k = 0;
+    for (std::uint32_t o = 0; o < 8; ++o)
+      if ((nd.childMask >> o) & 1u)
+        self(self, nd.first + k++, level + 1u,
+             {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
+  };
+  visit(visit, 0u, 0u, {0u, 0u, 0u});
+}
+
 // The surface area heuristic's expected cost of a random ray through the
 // scene's box, in primitive tests: every node clipped to the box and weighted
 // by the probability that such a ray meets it (its area over the box's), a
@@ -336,7 +352,7 @@ double OctreeCost(const Scene& scene, const OctreeData& tree)
   const double sceneArea = area(wlo, whi);
   if (!(sceneArea > 0.0)) return 0.0;
   double cost = 0.0;
-  auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) -> void {
+  ForEachOctreeNode(tree, [&](std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) {
     const OctreeNode& nd = tree.nodes[ni];
     double lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
@@ -344,13 +360,7 @@ double OctreeCost(const Scene& scene, const OctreeData& tree)
       hi[a] = std::min(whi[a], double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u)));
     }
     cost += area(lo, hi) / sceneArea * (nd.childMask ? kSahStep : double(nd.count));
-    std::uint32_t k = 0;
-    for (std::uint32_t o = 0; o < 8; ++o)
-      if ((nd.childMask >> o) & 1u)
-        self(self, nd.first + k++, level + 1u,
-             {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
-  };
-  visit(visit, 0u, 0u, {0u, 0u, 0u});
+  });
   return cost;
 }
 
@@ -383,41 +393,32 @@ std::uint64_t AddLeafBoxes(const Scene& scene, OctreeData& tree, double pad)
     float f = static_cast<float>(x);
     return double(f) < x ? std::nextafter(f, INFINITY) : f;
   };
-  auto visit = [&](auto&& self, std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) -> void {
+  ForEachOctreeNode(tree, [&](std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) {
     OctreeNode& nd = tree.nodes[ni];
-    if (nd.childMask == 0u) {
-      const std::uint32_t first = nd.first, count = nd.count;
-      if (count > 0u) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (std::uint32_t i = first; i < first + count; ++i) {
-          const Bounds b = scene.UnifiedBounds(tree.refs[i]);
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], double(b.lo[a]));
-            hi[a] = std::max(hi[a], double(b.hi[a]));
-          }
-        }
-        float box[6];
+    if (nd.childMask != 0u) return;
+    const std::uint32_t first = nd.first, count = nd.count;
+    if (count > 0u) {
+      double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+      for (std::uint32_t i = first; i < first + count; ++i) {
+        const Bounds b = scene.UnifiedBounds(tree.refs[i]);
         for (int a = 0; a < 3; ++a) {
-          const double clo = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a])) - pad;
-          const double chi = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u)) + pad;
-          box[a] = down(std::max(lo[a], clo));
-          box[3 + a] = up(std::min(hi[a], chi));
+          lo[a] = std::min(lo[a], double(b.lo[a]));
+          hi[a] = std::max(hi[a], double(b.hi[a]));
         }
-        for (float f : box) refs.push_back(std::bit_cast<std::uint32_t>(f));
-        ++boxes;
       }
-      nd.first = static_cast<std::uint32_t>(refs.size());
-      refs.insert(refs.end(), tree.refs.begin() + first, tree.refs.begin() + first + count);
-      return;
+      float box[6];
+      for (int a = 0; a < 3; ++a) {
+        const double clo = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a])) - pad;
+        const double chi = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u)) + pad;
+        box[a] = down(std::max(lo[a], clo));
+        box[3 + a] = up(std::min(hi[a], chi));
+      }
+      for (float f : box) refs.push_back(std::bit_cast<std::uint32_t>(f));
+      ++boxes;
     }
-    std::uint32_t k = 0;
-    const std::uint32_t kids = nd.first;
-    for (std::uint32_t o = 0; o < 8; ++o)
-      if ((nd.childMask >> o) & 1u)
-        self(self, kids + k++, level + 1u,
-             {2u * c[0] + (o & 1u), 2u * c[1] + ((o >> 1) & 1u), 2u * c[2] + ((o >> 2) & 1u)});
-  };
-  visit(visit, 0u, 0u, {0u, 0u, 0u});
+    nd.first = static_cast<std::uint32_t>(refs.size());
+    refs.insert(refs.end(), tree.refs.begin() + first, tree.refs.begin() + first + count);
+  });
   if (refs.size() > 0xFFFFFFFFull) throw RuntimeError("octree: the leaf boxes exceed 32-bit reference indices");
   tree.refs = std::move(refs);
   tree.header.nRefs = static_cast<std::uint32_t>(tree.refs.size());
