@@ -159,7 +159,11 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         if (!skip.empty()) {
           row.note = skip;
         } else if (set.rays.empty()) {
-          row.note = "skipped: the ray set is empty (no primary hits for secondary rays)";
+          // Shadow rays run from primary hits to the point lights: a scene lit
+          // only by emitting surfaces (cornell) has none to cast.
+          row.note = row.kind == RayKind::Shadow && scene.lights.empty()
+                         ? "skipped: the ray set is empty (the scene has no point light for shadow rays)"
+                         : "skipped: the ray set is empty (no primary hits for secondary rays)";
         } else {
           try {
             std::vector<HitRecord> hits;
