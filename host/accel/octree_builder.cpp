@@ -24,6 +24,7 @@
 #include <numeric>
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "host/accel/accel.h"
@@ -382,44 +383,51 @@ struct Candidate {
 // number of boxes.
 std::uint64_t AddLeafBoxes(const Scene& scene, OctreeData& tree, double pad)
 {
-  std::vector<std::uint32_t> refs;
-  refs.reserve(tree.refs.size() + tree.nodes.size() * CR_OCTREE_BOX_WORDS);
-  std::uint64_t boxes = 0;
-  auto down = [](double x) {
-    float f = static_cast<float>(x);
-    return double(f) > x ? std::nextafter(f, -INFINITY) : f;
+  // The leaves in walk order with their cells, and where each one's box
+  // and references go; then the boxes in parallel.
+  struct LeafAt {
+    std::uint32_t node, level;
+    std::array<std::uint32_t, 3> c;
+    std::uint64_t at;  // its first word in the new references
   };
-  auto up = [](double x) {
-    float f = static_cast<float>(x);
-    return double(f) < x ? std::nextafter(f, INFINITY) : f;
-  };
+  std::vector<LeafAt> leaves;
+  std::uint64_t words = 0, boxes = 0;
   ForEachOctreeNode(tree, [&](std::uint32_t ni, std::uint32_t level, const std::array<std::uint32_t, 3>& c) {
-    OctreeNode& nd = tree.nodes[ni];
+    const OctreeNode& nd = tree.nodes[ni];
     if (nd.childMask != 0u) return;
-    const std::uint32_t first = nd.first, count = nd.count;
-    if (count > 0u) {
-      double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-      for (std::uint32_t i = first; i < first + count; ++i) {
-        const Bounds b = scene.UnifiedBounds(tree.refs[i]);
-        for (int a = 0; a < 3; ++a) {
-          lo[a] = std::min(lo[a], double(b.lo[a]));
-          hi[a] = std::max(hi[a], double(b.hi[a]));
-        }
-      }
-      float box[6];
-      for (int a = 0; a < 3; ++a) {
-        const double clo = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a])) - pad;
-        const double chi = double(octree_kernel::Octree_Plane(&tree.header, a, level, c[a] + 1u)) + pad;
-        box[a] = down(std::max(lo[a], clo));
-        box[3 + a] = up(std::min(hi[a], chi));
-      }
-      for (float f : box) refs.push_back(std::bit_cast<std::uint32_t>(f));
-      ++boxes;
-    }
-    nd.first = static_cast<std::uint32_t>(refs.size());
-    refs.insert(refs.end(), tree.refs.begin() + first, tree.refs.begin() + first + count);
+    leaves.push_back({ni, level, c, words});
+    boxes += nd.count > 0u;
+    words += (nd.count > 0u ? CR_OCTREE_BOX_WORDS : 0u) + nd.count;
   });
-  if (refs.size() > 0xFFFFFFFFull) throw RuntimeError("octree: the leaf boxes exceed 32-bit reference indices");
+  if (words > 0xFFFFFFFFull) throw RuntimeError("octree: the leaf boxes exceed 32-bit reference indices");
+  std::vector<std::uint32_t> refs(words);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      const LeafAt& leaf = leaves[k];
+      OctreeNode& nd = tree.nodes[leaf.node];
+      const std::uint32_t first = nd.first, count = nd.count;
+      std::uint64_t at = leaf.at;
+      if (count > 0u) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (std::uint32_t i = first; i < first + count; ++i) {
+          const Bounds b = scene.UnifiedBounds(tree.refs[i]);
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], double(b.lo[a]));
+            hi[a] = std::max(hi[a], double(b.hi[a]));
+          }
+        }
+        for (int a = 0; a < 3; ++a) {
+          const double clo = double(octree_kernel::Octree_Plane(&tree.header, a, leaf.level, leaf.c[a])) - pad;
+          const double chi = double(octree_kernel::Octree_Plane(&tree.header, a, leaf.level, leaf.c[a] + 1u)) + pad;
+          refs[at + a] = std::bit_cast<std::uint32_t>(FloatDown(std::max(lo[a], clo)));
+          refs[at + 3 + a] = std::bit_cast<std::uint32_t>(FloatUp(std::min(hi[a], chi)));
+        }
+        at += CR_OCTREE_BOX_WORDS;
+      }
+      std::copy(tree.refs.begin() + first, tree.refs.begin() + first + count, refs.begin() + at);
+      nd.first = static_cast<std::uint32_t>(at);
+    }
+  });
   tree.refs = std::move(refs);
   tree.header.nRefs = static_cast<std::uint32_t>(tree.refs.size());
   return boxes;
