@@ -145,6 +145,7 @@ TEST_CASE("bench: a scene without lights skips its shadow rows and runs the rest
                                 scene.string(), out.string()),
                     dir, &err) == 0);
   CHECK(err.find("no shadow rays") != std::string::npos);
+  CHECK(err.find("the scene has no point light") != std::string::npos);
   std::ifstream in(out / "results.json");
   const nlohmann::json j = nlohmann::json::parse(in);
   int primary = 0, shadowSkipped = 0;

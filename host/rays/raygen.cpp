@@ -177,6 +177,12 @@ std::vector<RayRecord> GenerateRays(const Scene& scene, const ref::ReferenceTrac
     return rays;
   }
 
+  // Shadow rays aim at the point lights: a scene lit only by emitting
+  // surfaces has none to aim at (its soft-shadow rays aim at those).
+  if (opt.kind == RayKind::Shadow && scene.lights.empty())
+    throw InputError(scene.path, 0,
+                     "no shadow rays: the scene has no point light (an `l` statement); its emitting surfaces, if "
+                     "any, take soft-shadow rays (--kind soft)");
   // Shadow and diffuse: passes of primary samples (pixel centres, then
   // jittered) until enough rays exist.
   const std::uint64_t perPass = std::uint64_t(w) * std::uint64_t(h);
