@@ -13,7 +13,7 @@ must be occluded, by any primitive.
                     [--scenes balls,gears,...] [--kinds primary,shadow,diffuse]
                     [--configs simd:bvh,simd:grid,simd:octree,scalar:bvh,opencl:bvh]
                     [--precision robust] [--rays 65536] [--repeat 5] [--rounds 2] [--threads 1]
-                    [--stat median|min]
+                    [--stat median|min] [--trace-args="--octree-margin ray"]
 
 Run it on a quiet machine: the ratio of two noisy medians is noisier still,
 so --rounds repeats the whole alternation and the best median of each build
@@ -54,6 +54,8 @@ def main():
                     help="per run, the median of the --repeat timings (default) or their minimum; PoCL's "
                          "timings on a small machine are bimodal (runs twice as slow as the rest), where the "
                          "minimum is the steadier figure")
+    ap.add_argument("--trace-args", default="",
+                    help="more `cellray trace` options for both builds, e.g. \"--octree-margin ray\"")
     a = ap.parse_args()
     side = int(math.ceil(math.sqrt(a.rays)))
     logs = {}
@@ -78,7 +80,7 @@ def main():
                             out = os.path.join(tmp, f"{name}.hits")
                             r = run([binary, "trace", path, "--rays", rays, "--accel", accel, "--backend", backend,
                                      "--precision", a.precision, "--repeat", str(a.repeat), "--threads",
-                                     str(a.threads), "-o", out] + occ + var)
+                                     str(a.threads), "-o", out] + occ + var + a.trace_args.split())
                             ms = r["trace_ms_min"] if a.stat == "min" else r["trace_ms"]
                             best[name] = min(best.get(name, float("inf")), ms)
                             with open(out, "rb") as f:

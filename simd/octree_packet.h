@@ -308,6 +308,11 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
   }
 }
 
+// The lazy search (OctreePacket_SearchSigns, kLazy; for the octrees whose
+// heaviest path has a chain of kOctreeLazyChain levels, simd/simd_kernels.h)
+// at the nodes that at least this many lanes enter.
+inline constexpr int kOctreeLazyLanes = 4;
+
 // Octree_TraceRay (--octree-margin ray) for the lanes of `lanes`, whose
 // directions all have the sign bits signMask: one shared path through the
 // tree; at each node, every lane's widened interval of each child (from its
@@ -316,7 +321,18 @@ CR_SIMD_INLINE void OctreePacket_TraceSigns(const KernelScene& sc, const RayPack
 // and whose hit does not yet lie before its entry. Lane by lane that is the
 // single walk's search (the same children, order and tests), so answers
 // and counts are the scalar backend's.
-template <int N, unsigned kTypes, bool kFast, bool kStats>
+//
+// kLazy: a node's children after the first that some lane meets are met
+// only when the walk comes back to the node, and not at all where every
+// lane's hit by then lies before the least entry they can have. The same
+// visits, order and counts (below). A packet that descends a chain of nodes
+// to the detail it hits (the teapot in a stadium, seen from inside the
+// stadium) then meets one child per level instead of four, and climbs back
+// without meeting the others; a shadow ray climbs no higher than the node
+// that holds its light. Elsewhere the bookkeeping costs more than it saves
+// (primary and shadow rays of the SPD scenes and meshes 2-12% slower), so
+// the tracer picks it by the tree's shape (kOctreeLazyChain).
+template <int N, unsigned kTypes, bool kFast, bool kStats, bool kLazy>
 CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPacket<N>& P, HitPacket<N>& H,
                                              unsigned lanes, unsigned signMask, int anyHit,
                                              std::uint32_t (*mailbox)[N], TraceStatsSum& st)
@@ -333,6 +349,9 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
     vfloat<N> x[2][3];  // OctreeHiN of the mid ([0]) and far ([1]) parameters
     std::uint32_t node;
     unsigned todo;        // mirrored children still to visit, in increasing order
+    unsigned deferred;    // stored mirrored children after the first met one, not yet met (below)
+    unsigned lanes;       // the lanes that entered the node
+    unsigned first;       // the first mirrored child met
     std::uint8_t in[8];   // per mirrored child: the lanes that met it on entry
   };
   Frame fr[kOctreeMaxDepth];
@@ -364,22 +383,74 @@ CR_SIMD_INLINE void OctreePacket_SearchSigns(const KernelScene& sc, const RayPac
   auto entry = [](const Frame& G, unsigned m) {
     return Max(Max(G.e[m & 1u][0], G.e[(m >> 1) & 1u][1]), G.e[(m >> 2) & 1u][2]);
   };
-  // The lanes of `in` that meet each stored child of G's node.
-  auto enter = [&](Frame& G, unsigned in) {
-    unsigned mine = OctreeMirroredChildren(nodes[G.node].childMask, signMask), todo = 0u;
+  // The lanes of `in` that meet mirrored child m of G's node, with the
+  // closest hits at hitT.
+  auto meetOf = [&](const Frame& G, unsigned m, unsigned in, vfloat<N> hitT) __attribute__((always_inline)) {
+    const vfloat<N> cx = Min(Min(G.x[m & 1u][0], G.x[(m >> 1) & 1u][1]), G.x[(m >> 2) & 1u][2]);
+    return in & (Max(entry(G, m), P.tmin) <= Min(cx, hitT)).Bits();
+  };
+  // The lanes of `in` that meet each of the stored children `mine`.
+  auto meetAll = [&](Frame& G, unsigned in, unsigned mine) __attribute__((always_inline)) {
     const vfloat<N> hitT = H.t;
+    unsigned todo = 0u;
     for (; mine; mine &= mine - 1u) {
       const unsigned m = static_cast<unsigned>(LowestBit(mine));
-      const vfloat<N> cx = Min(Min(G.x[m & 1u][0], G.x[(m >> 1) & 1u][1]), G.x[(m >> 2) & 1u][2]);
-      const unsigned meet = in & (Max(entry(G, m), P.tmin) <= Min(cx, hitT)).Bits();
+      const unsigned meet = meetOf(G, m, in, hitT);
       G.in[m] = static_cast<std::uint8_t>(meet);
       todo |= (meet != 0u ? 1u : 0u) << m;
     }
-    G.todo = todo;
+    G.todo |= todo;
+  };
+  // G's node entered by the lanes of `in`: the lanes that meet each of its
+  // stored children; lazily (kLazy, kOctreeLazyLanes or more lanes), in
+  // increasing order up to the first that some lane meets, the rest left for
+  // when the walk comes back to the node (deferred, below).
+  auto enter = [&](Frame& G, unsigned in) __attribute__((always_inline)) {
+    unsigned mine = OctreeMirroredChildren(nodes[G.node].childMask, signMask);
+    G.todo = 0u;
+    G.deferred = 0u;
+    G.lanes = in;
+    if (!kLazy || PopCount(in) < kOctreeLazyLanes) {
+      meetAll(G, in, mine);
+      return;
+    }
+    const vfloat<N> hitT = H.t;
+    for (; mine; mine &= mine - 1u) {
+      const unsigned m = static_cast<unsigned>(LowestBit(mine));
+      const unsigned meet = meetOf(G, m, in, hitT);
+      G.in[m] = static_cast<std::uint8_t>(meet);
+      if (meet) {
+        G.todo = 1u << m;
+        G.first = m;
+        G.deferred = mine & (mine - 1u);
+        return;
+      }
+    }
   };
   F->node = 0u;
   enter(*F, live);
   for (;;) {
+    if (kLazy && F->todo == 0u && F->deferred != 0u) {
+      // The children after the first met one, m, are met only now, with the
+      // hit as it is: the search visits a child only where its entry lies
+      // at or before the hit, which only nears, so they are the children the
+      // walk would have visited had it met them on entry (the same visits,
+      // order and counts). Each such child m' > m is not a subset of m: on
+      // some axis a, m' is the node's far half and m its near half, so the
+      // widened entry of m' is at least the node's widened mid parameter on
+      // a. Where every lane that entered has its hit before the least of
+      // those (on the axes where m is the near half), none is visited, and
+      // none is met (a ray that hits the teapot in a stadium climbs the
+      // stadium's chain of nodes without meeting their other children).
+      const unsigned need = F->lanes & live;
+      if (need) {
+        vfloat<N> bound(INFINITY);
+        for (int a = 0; a < 3; ++a)
+          if (!((F->first >> a) & 1u)) bound = Min(bound, F->e[1][a]);
+        if ((need & (H.t < bound).Bits()) != need) meetAll(*F, F->lanes, F->deferred);
+      }
+      F->deferred = 0u;
+    }
     if (F->todo == 0u) {
       if (d == 0) return;
       F = &fr[--d];
@@ -435,8 +506,10 @@ CR_SIMD_INLINE void OctreePacket_Trace(const KernelScene& sc, const RayPacket<N>
     unsigned cls = rest;
     for (int a = 0; a < 3; ++a) cls &= ((signMask >> a) & 1u) ? neg[a] : ~neg[a];
     rest &= ~cls;
-    if (sc.octreeHeader->flags & CR_OCTREE_MARGIN_RAY)
-      OctreePacket_SearchSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
+    if ((sc.octreeHeader->flags & CR_OCTREE_MARGIN_RAY) && sc.octreeLazy)
+      OctreePacket_SearchSigns<N, kTypes, kFast, kStats, true>(sc, P, H, cls, signMask, anyHit, mailbox, st);
+    else if (sc.octreeHeader->flags & CR_OCTREE_MARGIN_RAY)
+      OctreePacket_SearchSigns<N, kTypes, kFast, kStats, false>(sc, P, H, cls, signMask, anyHit, mailbox, st);
     else
       OctreePacket_TraceSigns<N, kTypes, kFast, kStats>(sc, P, H, cls, signMask, anyHit, mailbox, st);
   }

@@ -49,6 +49,13 @@ struct SimdPrim;
 enum class KernelAccel { CR_ACCEL_TYPES(CR_SIMD_ACCEL_ENUM_) };
 #undef CR_SIMD_ACCEL_ENUM_
 
+// The ray-margin octree's packet walk searches lazily (simd/octree_packet.h
+// OctreePacket_SearchSigns) where the tree's heaviest path has a chain of at
+// least this many levels (OctreeChainLength, host/accel/accel.h): a factor
+// of 256 between the space and the detail most rays go to. The stadiums'
+// trees have 11; the SPD scenes' and meshes' 0 to 5.
+inline constexpr std::uint32_t kOctreeLazyChain = 8;
+
 // Everything a kernel reads, as raw pointers into arrays the tracer owns.
 struct KernelScene {
   // Each structure's flat layout (kernels/types.h): header, nodes and
@@ -71,6 +78,7 @@ struct KernelScene {
   PrimRanges ranges{};
   const std::uint32_t* primIds = nullptr;  // scene id of every g
   int unifiedHits = 0;                     // TraceConfig::unifiedHits
+  int octreeLazy = 0;                      // the ray-margin octree's packets search lazily (simd/octree_packet.h)
   // Motion of every g (kernels/motion.h: 4 floats each), null for a static
   // scene.
   const float* motion = nullptr;

@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
@@ -37,6 +39,20 @@ std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig
 namespace simd {
 
 namespace {
+
+// Whether the ray-margin octree's packets search lazily (simd/octree_packet.h
+// kLazy): by the tree's shape, or as $CELLRAY_OCTREE_LAZY says (on, off or
+// auto: a testing and measuring aid; the answers are the same either way).
+bool OctreeLazy(const OctreeData& tree)
+{
+  const char* env = std::getenv("CELLRAY_OCTREE_LAZY");
+  const std::string how = env ? env : "";
+  if (how == "on") return true;
+  if (how == "off") return false;
+  if (!how.empty() && how != "auto")
+    throw InputError(fmt::format("CELLRAY_OCTREE_LAZY='{}': expected on, off or auto", how));
+  return OctreeChainLength(tree) >= kOctreeLazyChain;
+}
 
 enum class Variant { Auto, Packet, Single };
 
@@ -170,6 +186,8 @@ class SimdTracer final : public Tracer {
     if (wide_) wide_->Bind(sc_);
     sc_.primIds = primIds_.data();
     sc_.unifiedHits = cfg.unifiedHits ? 1 : 0;
+    if (cfg.accel == AccelKind::Octree && (data_.octree.header.flags & CR_OCTREE_MARGIN_RAY))
+      sc_.octreeLazy = OctreeLazy(data_.octree) ? 1 : 0;
     sc_.motion = motion_.empty() ? nullptr : motion_.data();
 
     KernelKey key;

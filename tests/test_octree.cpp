@@ -15,6 +15,7 @@
 #include "host/core/error.h"
 #include "host/scene/generate.h"
 #include "host/trace/tracer.h"
+#include "simd/simd_kernels.h"
 #include "tests/test_util.h"
 
 using namespace cr;
@@ -550,6 +551,19 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
   const OctreeData tree = BuildOctree(scene, ray, info);
   CHECK(tree.header.flags == (CR_OCTREE_MARGIN_RAY | CR_OCTREE_LEAF_BOXES));
   CHECK(info.params.find("margin=ray leaf_box=on") != std::string::npos);
+  // The flake hangs at the end of a chain of nodes (each with one interior
+  // child, the others ground): long enough that the SIMD packets search it
+  // lazily (simd/octree_packet.h), so the paths below check that form too;
+  // the SPD teapot has no such chain down its heaviest path.
+  const std::uint32_t chain = OctreeChainLength(tree);
+  MESSAGE("chain: ", chain, " levels");
+  CHECK(chain >= simd::kOctreeLazyChain);
+  CHECK(info.params.find(fmt::format("chain={}", chain)) != std::string::npos);
+  {
+    AccelInfo teapotInfo;
+    const OctreeData teapot = BuildOctree(test::CachedScene(test::SpdPath("teapot")), ray, teapotInfo);
+    CHECK(OctreeChainLength(teapot) < simd::kOctreeLazyChain);
+  }
   // Without the scene's padding fewer cells take each primitive.
   MESSAGE("references: scene margins ", classicInfo.refs, ", ray margins ", info.refs);
   CHECK(info.refs < classicInfo.refs);

@@ -147,6 +147,12 @@ double OctreeCost(const Scene& scene, const OctreeData& tree);
 // the cell's integer coordinates at that level).
 void ForEachOctreeNode(const OctreeData& tree,
                        const std::function<void(std::uint32_t, std::uint32_t, const std::array<std::uint32_t, 3>&)>& fn);
+// Down an octree's heaviest path (from the root, the child with the most
+// references below it), the longest run of nodes each with exactly one
+// interior child (the others leaves or empty), in levels: where most of a
+// scene is a small detail in a large space (a teapot in a stadium), most
+// rays descend such a chain.
+std::uint32_t OctreeChainLength(const OctreeData& tree);
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info);
 // Appends each node's parent to the references (after them; the header's
 // `parents` says where; node 0's is 0) for the stackless walk (kernels/bvh.h,

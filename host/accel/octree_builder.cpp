@@ -331,6 +331,37 @@ void ForEachOctreeNode(const OctreeData& tree,
   visit(visit, 0u, 0u, {0u, 0u, 0u});
 }
 
+std::uint32_t OctreeChainLength(const OctreeData& tree)
+{
+  if (tree.nodes.empty()) return 0u;
+  // References below every node (a node's children follow it in the array).
+  std::vector<std::uint64_t> below(tree.nodes.size(), 0u);
+  for (std::size_t i = tree.nodes.size(); i-- > 0;) {
+    const OctreeNode& nd = tree.nodes[i];
+    if (nd.childMask == 0u) {
+      below[i] = nd.count;
+      continue;
+    }
+    for (std::uint32_t k = 0; k < static_cast<std::uint32_t>(std::popcount(nd.childMask)); ++k)
+      below[i] += below[nd.first + k];
+  }
+  // Down the heaviest child from the root: the longest run of nodes with one
+  // interior child.
+  std::uint32_t longest = 0, run = 0, ni = 0;
+  while (tree.nodes[ni].childMask != 0u) {
+    const OctreeNode& nd = tree.nodes[ni];
+    std::uint32_t interior = 0, heaviest = nd.first;
+    for (std::uint32_t k = 0; k < static_cast<std::uint32_t>(std::popcount(nd.childMask)); ++k) {
+      interior += tree.nodes[nd.first + k].childMask != 0u;
+      if (below[nd.first + k] > below[heaviest]) heaviest = nd.first + k;
+    }
+    run = interior == 1u ? run + 1u : 0u;
+    longest = std::max(longest, run);
+    ni = heaviest;
+  }
+  return longest;
+}
+
 // The surface area heuristic's expected cost of a random ray through the
 // scene's box, in primitive tests: every node clipped to the box and weighted
 // by the probability that such a ray meets it (its area over the box's), a
@@ -544,13 +575,14 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
   info.bytes = sizeof(OctreeHeader) + out.nodes.size() * sizeof(OctreeNode) + out.refs.size() * sizeof(std::uint32_t);
   // The classic octree's description is as it was; any other names its root.
   if (!rayMargin && rootHow.empty()) rootNote.clear();
-  info.params = fmt::format("{} depth={} reached={} unsplit={}{}{}{} (leaves include {} empty octants)",
+  info.params = fmt::format("{} depth={} reached={} unsplit={}{}{}{}{} (leaves include {} empty octants)",
                             sah ? std::string("sah") : fmt::format("leaf={}", maxLeaf),
                             sah || sahDepth == maxDepth ? fmt::to_string(maxDepth)
                                                         : fmt::format("{}+sah..{}", sahDepth, maxDepth),
                             out.header.maxDepth, cand.nUnsplit, mailbox ? " mailbox=on" : "",
                             rayMargin ? (leafBoxes ? " margin=ray leaf_box=on" : " margin=ray leaf_box=off") : "",
                             rootNote.empty() ? "" : " root=" + rootNote,
+                            rayMargin ? fmt::format(" chain={}", OctreeChainLength(out)) : std::string(),
                             cand.nEmptyOctants);
   return out;
 }
