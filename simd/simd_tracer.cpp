@@ -51,7 +51,7 @@ bool OctreeLazy(const OctreeData& tree)
   if (how == "off") return false;
   if (!how.empty() && how != "auto")
     throw InputError(fmt::format("CELLRAY_OCTREE_LAZY='{}': expected on, off or auto", how));
-  return OctreeChainLength(tree) >= kOctreeLazyChain;
+  return tree.chain >= kOctreeLazyChain;
 }
 
 enum class Variant { Auto, Packet, Single };

@@ -558,6 +558,7 @@ TEST_CASE("octree: the ray's margins (--octree-margin ray) on the teapot in a st
   const std::uint32_t chain = OctreeChainLength(tree);
   MESSAGE("chain: ", chain, " levels");
   CHECK(chain >= simd::kOctreeLazyChain);
+  CHECK(tree.chain == chain);
   CHECK(info.params.find(fmt::format("chain={}", chain)) != std::string::npos);
   {
     AccelInfo teapotInfo;

@@ -104,6 +104,7 @@ struct OctreeData {
   OctreeHeader header{};
   std::vector<OctreeNode> nodes;
   std::vector<std::uint32_t> refs;
+  std::uint32_t chain = 0;  // OctreeChainLength, set by BuildOctree with the ray's margins
   const std::vector<OctreeNode>& Nodes() const { return nodes; }
 };
 

@@ -335,7 +335,7 @@ std::uint32_t OctreeChainLength(const OctreeData& tree)
 {
   if (tree.nodes.empty()) return 0u;
   // References below every node (a node's children follow it in the array).
-  std::vector<std::uint64_t> below(tree.nodes.size(), 0u);
+  std::vector<std::uint32_t> below(tree.nodes.size(), 0u);  // refs are 32-bit indices: so are their counts
   for (std::size_t i = tree.nodes.size(); i-- > 0;) {
     const OctreeNode& nd = tree.nodes[i];
     if (nd.childMask == 0u) {
@@ -568,6 +568,7 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
                      (leafBoxes ? CR_OCTREE_LEAF_BOXES : 0u);
   const std::uint64_t nBoxes = leafBoxes ? AddLeafBoxes(scene, out, cand.pad) : 0u;
 
+  if (rayMargin) out.chain = OctreeChainLength(out);
   info.nodes = out.nodes.size();
   info.leaves += cand.nEmptyOctants;
   info.emptyLeaves += cand.nEmptyOctants;
@@ -582,7 +583,7 @@ OctreeData BuildOctree(const Scene& scene, const AccelParams& params, AccelInfo&
                             out.header.maxDepth, cand.nUnsplit, mailbox ? " mailbox=on" : "",
                             rayMargin ? (leafBoxes ? " margin=ray leaf_box=on" : " margin=ray leaf_box=off") : "",
                             rootNote.empty() ? "" : " root=" + rootNote,
-                            rayMargin ? fmt::format(" chain={}", OctreeChainLength(out)) : std::string(),
+                            rayMargin ? fmt::format(" chain={}", out.chain) : std::string(),
                             cand.nEmptyOctants);
   return out;
 }
