@@ -269,6 +269,15 @@ CR_FUNC void Octree_TraceRay(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL const 
           t1[a] = fT[9 * level + 6 + a];
         }
 #else
+        /* The parameters serve only a level with a child left to visit:
+         * climb past the finished ones without them. */
+        while (level > 0 && fTodo[level] == 0u) {
+          --level;
+          c[0] >>= 1;
+          c[1] >>= 1;
+          c[2] >>= 1;
+        }
+        if (fTodo[level] == 0u) return;
         Octree_CellT(hdr, ray, signMask, (uint)level, c, t0, tm, t1);
 #endif
         continue;
