@@ -159,11 +159,10 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         if (!skip.empty()) {
           row.note = skip;
         } else if (set.rays.empty()) {
-          // Shadow rays run from primary hits to the point lights: a scene lit
-          // only by emitting surfaces (cornell) has none to cast.
-          row.note = row.kind == RayKind::Shadow && scene.lights.empty()
-                         ? "skipped: the ray set is empty (the scene has no point light for shadow rays)"
-                         : "skipped: the ray set is empty (no primary hits for secondary rays)";
+          // Why, as the ray generator said (no point light for shadow rays,
+          // no primary hits for secondary rays).
+          row.note = fmt::format("skipped: the ray set is empty ({})",
+                                 set.why.empty() ? "no primary hits for secondary rays" : set.why);
         } else {
           try {
             std::vector<HitRecord> hits;

@@ -86,6 +86,7 @@ RaySet GetRaySet(const std::string& dir, const SceneRef& ref, const Scene& scene
     Warn(fmt::format("{} (its {} rows are skipped)", e.what(), RayKindName(spec.kind)));
     set.rays.clear();
     set.times.clear();
+    set.why = e.what();
     return set;
   }
   WriteRays(set.path, set.rays, set.times);

@@ -28,6 +28,7 @@ struct RaySet {
   std::string path;    // the cached .rays file
   int width = 0, height = 0;  // image of the primary pass
   bool fromCache = false;
+  std::string why;  // empty set: why the generator made none (its error)
 };
 
 // Image size of about `count` pixels with the camera's aspect ratio.
