@@ -470,13 +470,9 @@ struct OctreePath {
 };
 std::vector<OctreePath> OctreePaths()
 {
-  std::vector<OctreePath> paths = {{"scalar", Backend::Scalar, "", true},
-                                   {"simd packet", Backend::Simd, "packet", true},
-                                   {"simd single", Backend::Simd, "single", true}};
-  if (test::HaveOpenCLDevice()) {
-    paths.push_back({"opencl ray", Backend::OpenCL, "ray", true});
-    paths.push_back({"opencl packet", Backend::OpenCL, "packet", false});
-  }
+  std::vector<OctreePath> paths;
+  for (const test::TracePath& p : test::TracePaths())
+    paths.push_back({p.name, p.backend, p.variant, !(p.backend == Backend::OpenCL && std::string(p.variant) == "packet")});
   return paths;
 }
 }  // namespace

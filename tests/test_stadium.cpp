@@ -30,24 +30,6 @@ const Form kForms[] = {{"grid", AccelKind::Grid, ""},
                        {"hgrid", AccelKind::HGrid, ""},
                        {"bvh", AccelKind::BVH, ""}};
 
-struct Path {
-  const char* name;
-  Backend backend;
-  const char* variant;
-};
-
-std::vector<Path> Paths()
-{
-  std::vector<Path> paths = {{"scalar", Backend::Scalar, ""},
-                             {"simd packet", Backend::Simd, "packet"},
-                             {"simd single", Backend::Simd, "single"}};
-  if (test::HaveOpenCLDevice()) {
-    paths.push_back({"opencl ray", Backend::OpenCL, "ray"});
-    paths.push_back({"opencl packet", Backend::OpenCL, "packet"});
-  }
-  return paths;
-}
-
 // Rays from the pillars' ring (4,000 to 36,000 units out, 1 to 3,000 up) to
 // points on and around the teapot: their float walks stray by more than the
 // finest cells near the teapot, which must still not lose a hit.
@@ -72,7 +54,7 @@ TEST_CASE("teapot in a stadium (scenes/scale/teapot-stadium.nff): every structur
 {
   const Scene& scene = test::CachedScene(test::SourcePath("scenes/scale/teapot-stadium.nff"));
   const auto clCache = test::OpenCLTestCacheDir();
-  const std::vector<Path> paths = Paths();
+  const std::vector<test::TracePath> paths = test::TracePaths();
   struct Set {
     const char* name;
     std::vector<RayRecord> rays;
@@ -84,7 +66,7 @@ TEST_CASE("teapot in a stadium (scenes/scale/teapot-stadium.nff): every structur
   for (const Set& set : sets)
     for (bool occlusion : {false, true})
       for (std::size_t f = 0; f < std::size(kForms); ++f)
-        for (const Path& p : paths) {
+        for (const test::TracePath& p : paths) {
           CAPTURE(std::string(set.name));
           CAPTURE(occlusion);
           CAPTURE(std::string(kForms[f].name));

@@ -267,6 +267,25 @@ inline bool HaveOpenCLDevice()
   return have;
 }
 
+// Every traversal path of the backends here: scalar, the SIMD packet and
+// single-ray walks, and OpenCL per ray and packet where a device is present.
+struct TracePath {
+  const char* name;
+  Backend backend;
+  const char* variant;
+};
+inline std::vector<TracePath> TracePaths()
+{
+  std::vector<TracePath> paths = {{"scalar", Backend::Scalar, ""},
+                                  {"simd packet", Backend::Simd, "packet"},
+                                  {"simd single", Backend::Simd, "single"}};
+  if (HaveOpenCLDevice()) {
+    paths.push_back({"opencl ray", Backend::OpenCL, "ray"});
+    paths.push_back({"opencl packet", Backend::OpenCL, "packet"});
+  }
+  return paths;
+}
+
 // The OpenCL programs a conformance check of `precision` runs: robust the
 // ones specialised to the scene's types (what `cellray trace` builds), fp64
 // the every-type programs (CELLRAY_CL_TYPES=all) that the hard-case suite
