@@ -15,11 +15,14 @@
  *    refs), and `margin` the distance by which its cells took their
  *    references;
  *  - a cell holds either references (sorted ascending), or a child marker
- *    CR_HGRID_CHILD | k followed by the cell's own references: the cell is
- *    child grid nodes[k], whose first planes are the cell's lower planes,
- *    bit for bit, and whose last planes lie at or just past its upper planes
- *    (the builder rounds the cell size up, and the overshoot is within the
- *    parent's margin), so a child covers its cell without a gap.
+ *    CR_HGRID_CHILD | k, the number n of the cell's references, those n
+ *    (ascending), then the cell's large references (ascending, some of the
+ *    n): the cell holds child grid nodes[k], over the box of the cell's
+ *    other references within the cell grown by half the cell's margin (a
+ *    teapot's box in the cell of a stadium that also holds its ground), with
+ *    the large ones (a ground, a wall: the builder's IsLargeIn) left to the
+ *    cell, or over all the n where that is cheaper
+ *    (host/accel/hgrid_builder.cpp).
  *
  * Every level is walked by the 3D-DDA of kernels/grid.h with its robustness
  * rules (planes recomputed, never accumulated; first cell corrected to the
@@ -41,13 +44,20 @@
  * parent took with its larger margin. Fine cells serve the rays that come
  * near, and no ray walks cells finer than its own precision.
  *
- * A child's walk starts at the parameter where its parent's walk entered the
- * cell (Grid_EnterAt: no second box test); when it steps out of the child,
- * the parent's walk goes on from the cell. The walk ends when the closest
- * hit so far lies at or before the current cell's exit (at any level: a
- * child's last planes overshoot its cell by less than the parent's margin,
- * by which the parent's cell took its references, so nothing beyond the
- * cell is missed), or when it leaves the root. A hit beyond the cell (a
+ * A ray precise enough for a child tests the cell's large references, then
+ * meets the child's box by the conservative slab test (Box_Intersect, from
+ * the cell's entry up to the closest hit's Cull_Distance) and walks the
+ * child from where it enters the box (Grid_EnterAt at that parameter,
+ * clamped to the child's cells); a ray that misses the box skips the child.
+ * When the walk steps out of the child, the parent's walk goes on from the
+ * cell. The walk ends when the closest hit so far lies at or before the
+ * current cell's exit (at any level: a child's box reaches beyond its cell
+ * by less than the parent's margin, by which the parent's cell took its
+ * references, and the cell's large references were tested before, so
+ * nothing beyond the cell is missed; the child took every other reference
+ * of the cell within its box, and those lie in the box wherever they meet
+ * the cell grown by the child's margin, which is at most half the
+ * parent's), or when it leaves the root. A hit beyond the cell (a
  * primitive spanning cells) is kept while the walk goes on, as in the
  * uniform grid.
  *
@@ -81,8 +91,10 @@
  * tests per ray from 8.4 to 5.0 (primary) and from 12.3 to 4.8 (diffuse):
  * its ground and walls lie in many cells.
  *
- * Counts (CR_STATS): nTS cells visited at every level, nLeaves cells that
- * hold references or none, nEmptyLeaves the empty ones, nIT primitive tests. */
+ * Counts (CR_STATS): nTS cells visited at every level, nLeaves cells whose
+ * references the walk tests (or that hold none; a child cell where the ray
+ * descends counts where it has large references), nEmptyLeaves the empty
+ * ones, nIT primitive tests. */
 #ifndef CELLRAY_KERNELS_HGRID_H
 #define CELLRAY_KERNELS_HGRID_H
 #include "grid.h"
@@ -167,35 +179,50 @@ CR_FUNC void HGrid_Trace(CR_GLOBAL const GridHeader* root, CR_GLOBAL const GridH
     CR_GLOBAL const uint* cellStart = refs + g->first;
     const uint idx = Grid_CellIndex(g, cell);
     uint begin = cellStart[idx];
-    const uint end = cellStart[idx + 1u];
+    uint end = cellStart[idx + 1u];
+    uint child = CR_NO_HIT; /* the child grid the walk descends into after the cell's large references */
     if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
-      const uint child = refs[begin] & ~CR_HGRID_CHILD;
+      const uint k = refs[begin] & ~CR_HGRID_CHILD;
+      const uint nAll = refs[begin + 1u];
       int exitAxis;
-      if (HGrid_Reach(ray, Grid_CellExit(g, ray, cell, &exitAxis)) <= (real)subs[child].margin) {
-        CR_ASSERT(sp < CR_HGRID_MAX_DEPTH);
-        stackGrid[sp] = gi;
-        CR_UNROLL for (int a = 0; a < 3; ++a) stackCell[3 * sp + a] = cell[a];
-        ++sp;
-        gi = child;
-        g = subs + gi;
-        Grid_EnterAt(g, ray, tEnter, cell);
-        continue;
+      begin += 2u;
+      if (HGrid_Reach(ray, Grid_CellExit(g, ray, cell, &exitAxis)) <= (real)subs[k].margin) {
+        child = k;
+        begin += nAll; /* the large references */
+      } else {
+        end = begin + nAll; /* the child is finer than the ray's precision: all the cell's references */
       }
-      ++begin; /* finer than the ray's precision: the cell's own references */
     }
-    CR_COUNT(st, nLeaves);
     int moved = 2;
-    if (begin == end) {
-      CR_COUNT(st, nEmptyLeaves);
-      const uint d = HGrid_Distance(g, cellStart, idx);
-      if (d >= (uint)CR_HGRID_SKIP_MIN) moved = HGrid_Skip(g, ray, hit->t, (int)d, cell, &tEnter);
+    if (child == CR_NO_HIT || begin != end) {
+      CR_COUNT(st, nLeaves);
+      if (begin == end) {
+        CR_COUNT(st, nEmptyLeaves);
+        const uint d = HGrid_Distance(g, cellStart, idx);
+        if (d >= (uint)CR_HGRID_SKIP_MIN) moved = HGrid_Skip(g, ray, hit->t, (int)d, cell, &tEnter);
+      }
+      for (uint i = begin; i < end; ++i) {
+        const uint prim = refs[i];
+        if (mailbox[prim & (CR_HGRID_MAILBOX - 1u)] == prim) continue; /* tested already: same ray, same answer */
+        mailbox[prim & (CR_HGRID_MAILBOX - 1u)] = prim;
+        CR_COUNT(st, nIT);
+        if (Prim_Intersect(pv, prim, ray, hit) && anyHit) return;
+      }
     }
-    for (uint i = begin; i < end; ++i) {
-      const uint prim = refs[i];
-      if (mailbox[prim & (CR_HGRID_MAILBOX - 1u)] == prim) continue; /* tested already: same ray, same answer */
-      mailbox[prim & (CR_HGRID_MAILBOX - 1u)] = prim;
-      CR_COUNT(st, nIT);
-      if (Prim_Intersect(pv, prim, ray, hit) && anyHit) return;
+    /* Into the child where the ray meets its box (the conservative slab
+     * test, up to the closest hit's Cull_Distance), from where it enters. */
+    real tBox;
+    if (child != CR_NO_HIT &&
+        Box_Intersect(subs[child].bmin, subs[child].bmax, ray, tEnter, Cull_Distance(hit->t), &tBox)) {
+      CR_ASSERT(sp < CR_HGRID_MAX_DEPTH);
+      stackGrid[sp] = gi;
+      CR_UNROLL for (int a = 0; a < 3; ++a) stackCell[3 * sp + a] = cell[a];
+      ++sp;
+      gi = child;
+      g = subs + gi;
+      tEnter = tBox;
+      Grid_EnterAt(g, ray, tEnter, cell);
+      continue;
     }
     /* On to the next cell: of this grid, or, where the walk leaves it, of
      * the nearest ancestor it does not leave. */

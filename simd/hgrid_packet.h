@@ -235,42 +235,44 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
     // lanes at once.
     const vint<N> head = Gather(refs, Select(fullV, beginV, zero));
     const unsigned childs = AndNot(fullV, And(head, vint<N>(int(CR_HGRID_CHILD))) == zero).Bits();
-    // Child cells: a lane descends into the child grid where it is precise
-    // enough for it, else takes the cell's own references.
+    // Child cells: where the child is precise enough for the lane, it tests
+    // the cell's large references and then descends where it meets the
+    // child's box (below); else it tests all the cell's references.
     unsigned tests = full & ~childs;
-    unsigned enters = 0;  // lanes that descend: enter their child grid at their tEnter
+    unsigned descents = 0;  // lanes that test the large references, then meet the child's box
+    const GridHeader* childOf[N];
     for (unsigned rest = childs; rest; rest &= rest - 1u) {
       const int l = LowestBit(rest);
       const unsigned bit = 1u << l;
       const std::uint32_t begin = begins[l];
       const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
+      const std::uint32_t nAll = refs[begin + 1u];
+      begins[l] = begin + 2u;
       const float tExit = std::min(L.tNext[0][l], std::min(L.tNext[1][l], L.tNext[2][l]));
       if (reachPerT[l] * tExit <= child->margin) {
-        descend(l, child);
-        enters |= bit;
+        childOf[l] = child;
+        descents |= bit;
+        begins[l] += nAll;  // the large references
+        if (begins[l] != ends[l]) tests |= bit;
         continue;
       }
-      begins[l] = begin + 1u;
+      ends[l] = begins[l] + nAll;
       if (begins[l] == ends[l]) {  // no references of its own: an empty cell (below)
         childOnly |= bit;
         continue;
       }
       tests |= bit;
     }
-    if (enters) {
-      enterAt(enters, [](unsigned) {});
-      steps &= ~enters;
-    }
     // One pass over each cell for the lanes that stand in it (the lanes of
     // a coherent packet often do): a primitive against the lanes that do not
     // have it in their mailboxes; lane by lane where one or two lanes stand
     // in a cell of four references or more (CellRefs_ByLane).
     if (tests) {
-      const vint<N> bv = vint<N>::Load(begins);
+      const vint<N> bv = vint<N>::Load(begins), ev = vint<N>::Load(ends);
       unsigned done = 0;  // occlusion: lanes with an occluder
       for (unsigned pending = tests; pending;) {
         const int l0 = LowestBit(pending);
-        vbool<N> m = vbool<N>::FromBits(tests) & (bv == vint<N>(int(begins[l0])));
+        vbool<N> m = vbool<N>::FromBits(tests) & (bv == vint<N>(int(begins[l0]))) & (ev == vint<N>(int(ends[l0])));
         pending &= ~m.Bits();
         if constexpr (kStats) st.nLeaves += PopCount(m.Bits());
         MailboxPacketRefs_Intersect<N, CR_HGRID_MAILBOX, kTypes, kFast, kStats>(
@@ -279,8 +281,27 @@ CR_SIMD_INLINE void HGridPacket_Walk(const KernelScene& sc, const RayPacket<N>& 
       if (done) {
         live &= ~done;
         steps &= ~done;
+        descents &= ~done;
       }
       H.t.Store(L.hitT);
+    }
+    // The descents: into the child where the lane meets its box before its
+    // closest hit (HGrid_BoxEnter), from where it enters the box.
+    if (descents) {
+      unsigned enters = 0;
+      for (unsigned rest = descents; rest; rest &= rest - 1u) {
+        const int l = LowestBit(rest);
+        float tBox;
+        if (HGrid_BoxEnter<kFast>(*childOf[l], rays[l], L.tEnter[l], L.hitT[l], tBox)) {
+          descend(l, childOf[l]);
+          L.tEnter[l] = tBox;
+          enters |= 1u << l;
+        }
+      }
+      if (enters) {
+        enterAt(enters, [](unsigned) {});
+        steps &= ~enters;
+      }
     }
     // Empty cells (and child cells without references of their own whose
     // child is too fine for the ray): HGrid_Distance and HGrid_Skip on all

@@ -40,6 +40,29 @@ CR_SIMD_INLINE float HGrid_SkipExit(const GridHeader& g, const Ray& ray, const i
   return t;
 }
 
+// The descent's test of kernels/hgrid.h: Box_Intersect of child grid g's
+// box from tmin up to the closest hit's Cull_Distance, Box_Slabs'
+// operations in its order; the entry parameter in tEnter.
+template <bool kFast>
+CR_SIMD_INLINE bool HGrid_BoxEnter(const GridHeader& g, const Ray& ray, float tmin, float hitT, float& tEnter)
+{
+  float boxNear = -__builtin_inff(), boxFar = __builtin_inff();
+  for (int a = 0; a < 3; ++a) {
+    const float lo = (g.bmin[a] - ray.org[a]) * ray.inv[a];
+    const float hi = (g.bmax[a] - ray.org[a]) * ray.inv[a];
+    const bool neg = ray.inv[a] < 0.0f;
+    // fmax(boxNear, n) and fmin(boxFar, f): a NaN n or f (0 * inf on a
+    // plane-parallel ray from the plane) keeps the other.
+    const float tNear = neg ? hi : lo, tFar = neg ? lo : hi;
+    boxNear = tNear > boxNear ? tNear : boxNear;
+    boxFar = tFar < boxFar ? tFar : boxFar;
+  }
+  if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
+  const float cull = CullDistance<kFast>(hitT);
+  tEnter = boxNear > tmin ? boxNear : tmin;
+  return tEnter <= (boxFar < cull ? boxFar : cull);
+}
+
 // An ancestor grid on a walk's stack: the cell the walk goes on from (what
 // follows from the header is recomputed when popped).
 struct HGridSaved {
@@ -107,57 +130,73 @@ CR_SIMD_INLINE void HGridWalk_Run(const KernelScene& sc, const Ray& ray, const P
   for (;;) {
     if constexpr (kStats) ++st.nTS;
     std::uint32_t begin = w.cellStart[w.idx];
-    const std::uint32_t end = w.cellStart[w.idx + 1];
+    std::uint32_t end = w.cellStart[w.idx + 1];
+    // A child cell: its large references, then its child grid where the
+    // child is precise enough for the ray (HGrid_Reach at the cell's exit,
+    // Grid_CellExit: the smallest of the next crossings, as the scalar walk
+    // computes them); else all its references.
+    const GridHeader* child = nullptr;
     if (begin != end && (refs[begin] & CR_HGRID_CHILD) != 0u) {
-      const GridHeader* child = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
-      // HGrid_Reach at the cell's exit (Grid_CellExit: the smallest of the
-      // next crossings, as the scalar walk computes them).
+      const GridHeader* c = sc.hgridNodes + (refs[begin] & ~CR_HGRID_CHILD);
+      const std::uint32_t nAll = refs[begin + 1];
+      begin += 2;
       const float tExit = std::min(w.tNext[0], std::min(w.tNext[1], w.tNext[2]));
-      if (reachPerT * tExit <= child->margin) {
-        HGridSaved& s = w.stack[w.sp++];
-        s.g = w.g;
-        for (int a = 0; a < 3; ++a) {
-          s.cell[a] = w.cell[a];
-          s.tNext[a] = w.tNext[a];
-        }
-        s.idx = w.idx;
-        HGridWalk_SetGrid(w, refs, child, step);
-        int c[3];
-        GridSingle_EnterAt(*w.g, ray, w.tEnter, c);
-        HGridWalk_EnterCell(w, ray, step, c);
-        continue;
+      if (reachPerT * tExit <= c->margin) {
+        child = c;
+        begin += nAll;  // the large references
+      } else {
+        end = begin + nAll;
       }
-      ++begin;  // finer than the ray's precision: the cell's own references
     }
-    if constexpr (kStats) ++st.nLeaves;
     // Set where a jump leaves this grid: the walk goes on in the parent's.
     bool leave = false;
-    if (begin == end) {
-      if constexpr (kStats) ++st.nEmptyLeaves;
-      // HGrid_Distance and HGrid_Skip of kernels/hgrid.h.
-      const std::uint32_t idx = w.idx;
-      const int d = int((w.cellStart[w.g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
-      if (d >= CR_HGRID_SKIP_MIN) {
-        int axis, last;
-        const float t = HGrid_SkipExit(*w.g, ray, step, w.cell, w.res, d, axis, last);
-        if (t > w.tEnter) {
-          w.tEnter = t;
-          if (hit.t <= t) return;
-          const int next = last + step[axis];
-          if (static_cast<unsigned>(next) < static_cast<unsigned>(w.res[axis])) {
-            int c[3];
-            GridSingle_EnterAt(*w.g, ray, t, c);
-            c[axis] = next;
-            HGridWalk_EnterCell(w, ray, step, c);
-            continue;
+    if (child == nullptr || begin != end) {
+      if constexpr (kStats) ++st.nLeaves;
+      if (begin == end) {
+        if constexpr (kStats) ++st.nEmptyLeaves;
+        // HGrid_Distance and HGrid_Skip of kernels/hgrid.h.
+        const std::uint32_t idx = w.idx;
+        const int d = int((w.cellStart[w.g->nCells + 1 + (idx >> 2)] >> ((idx & 3u) * 8u)) & 0xffu);
+        if (d >= CR_HGRID_SKIP_MIN) {
+          int axis, last;
+          const float t = HGrid_SkipExit(*w.g, ray, step, w.cell, w.res, d, axis, last);
+          if (t > w.tEnter) {
+            w.tEnter = t;
+            if (hit.t <= t) return;
+            const int next = last + step[axis];
+            if (static_cast<unsigned>(next) < static_cast<unsigned>(w.res[axis])) {
+              int c[3];
+              GridSingle_EnterAt(*w.g, ray, t, c);
+              c[axis] = next;
+              HGridWalk_EnterCell(w, ray, step, c);
+              continue;
+            }
+            leave = true;
           }
-          leave = true;
         }
+      } else {
+        if (MailboxRefs_Intersect<CR_HGRID_MAILBOX, kTypes, kFast, kStats>(sc, refs, begin, end, w.mailbox,
+                                                                           w.mailboxStride, pr, hit, anyHit, st))
+          return;
       }
-    } else {
-      if (MailboxRefs_Intersect<CR_HGRID_MAILBOX, kTypes, kFast, kStats>(sc, refs, begin, end, w.mailbox,
-                                                                         w.mailboxStride, pr, hit, anyHit, st))
-        return;
+    }
+    // Into the child where the ray meets its box before the closest hit,
+    // from where it enters the box.
+    float tBox;
+    if (child != nullptr && HGrid_BoxEnter<kFast>(*child, ray, w.tEnter, hit.t, tBox)) {
+      HGridSaved& s = w.stack[w.sp++];
+      s.g = w.g;
+      for (int a = 0; a < 3; ++a) {
+        s.cell[a] = w.cell[a];
+        s.tNext[a] = w.tNext[a];
+      }
+      s.idx = w.idx;
+      HGridWalk_SetGrid(w, refs, child, step);
+      w.tEnter = tBox;
+      int c[3];
+      GridSingle_EnterAt(*w.g, ray, w.tEnter, c);
+      HGridWalk_EnterCell(w, ray, step, c);
+      continue;
     }
     // Exit face: the smallest crossing, x before y before z on ties (the
     // scalar loop's strict <), chosen without branches.
