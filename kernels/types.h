@@ -278,8 +278,9 @@ typedef struct {
 
 /* Hierarchical grid (kernels/hgrid.h): levels below the root grid (the
  * builder's limit and the walk's stack depth), the marker of a cell that is
- * a child grid (its first item is CR_HGRID_CHILD | node index, the cell's
- * own references follow), and the bound on a float walk's error per unit
+ * a child grid (its first item is CR_HGRID_CHILD | node index, then the
+ * number of the cell's references, those, and its large references), and
+ * the bound on a float walk's error per unit
  * of distance travelled (2^-21: 8 units in the last place, HGrid_Reach). */
 #define CR_HGRID_MAX_DEPTH 4
 #define CR_HGRID_CHILD 0x80000000u
