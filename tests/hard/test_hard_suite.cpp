@@ -8,23 +8,36 @@
 
 using namespace cr;
 
+namespace {
+
+// Runs the suite as `o` says, warnings quiet, and checks that every row
+// answers with 0 wrong (and, with mustRun, that none was skipped); returns
+// the rays judged.
+std::uint64_t RunAllRight(const HardOptions& o, bool mustRun = false)
+{
+  SetWarningsQuiet(true);
+  const auto results = RunHardSuite(o);
+  SetWarningsQuiet(false);
+  std::uint64_t judged = 0;
+  for (const auto& r : results) {
+    INFO(o.simdVariant, " ", r.caseName, " ", std::string(AccelKindName(r.accel)), " ",
+         std::string(PrecisionName(r.precision)), ": ", r.wrong, " wrong of ", r.rays, " ", r.note);
+    if (mustRun) CHECK(!r.skipped);
+    CHECK(r.wrong == 0);
+    judged += r.rays;
+  }
+  return judged;
+}
+
+}  // namespace
+
 TEST_CASE("hard: every case's expectation holds for the fp64 reference tracer")
 {
   HardOptions o;
   o.quick = true;
   o.backends = {Backend::Reference};
   o.precisions = {Precision::Fp64};
-  SetWarningsQuiet(true);
-  const auto results = RunHardSuite(o);
-  SetWarningsQuiet(false);
-  std::size_t judged = 0;
-  for (const auto& r : results) {
-    INFO(r.caseName, " ", std::string(AccelKindName(r.accel)), ": ", r.wrong, " wrong of ", r.rays, " ", r.note);
-    CHECK(!r.skipped);
-    CHECK(r.wrong == 0);
-    judged += r.rays;
-  }
-  CHECK(judged > 100000);
+  CHECK(RunAllRight(o, true) > 100000);
 }
 
 TEST_CASE("hard: the suite sees the fast mode fail (textbook quadratic, Moller-Trumbore at edges)")
@@ -91,17 +104,7 @@ TEST_CASE("hard: the SIMD hierarchical grid's packet walk answers every case, ro
     o.accels = {AccelKind::HGrid};
     o.precisions = {Precision::Robust, Precision::Fp64};
     o.simdVariant = variant;
-    SetWarningsQuiet(true);
-    const auto results = RunHardSuite(o);
-    SetWarningsQuiet(false);
-    std::uint64_t judged = 0;
-    for (const auto& r : results) {
-      INFO(variant, " ", r.caseName, " ", std::string(PrecisionName(r.precision)), ": ", r.wrong, " wrong of ",
-           r.rays, " ", r.note);
-      CHECK(r.wrong == 0);
-      judged += r.rays;
-    }
-    CHECK(judged > 100000);
+    CHECK(RunAllRight(o) > 100000);
   }
 }
 
@@ -118,16 +121,7 @@ TEST_CASE("hard: the SIMD ray-margin octree's lazy packet search answers every c
   o.params.octreeMargin = "ray";
   o.precisions = {Precision::Robust, Precision::Fp64};
   o.simdVariant = "packet";
-  SetWarningsQuiet(true);
-  const auto results = RunHardSuite(o);
-  SetWarningsQuiet(false);
-  std::uint64_t judged = 0;
-  for (const auto& r : results) {
-    INFO(r.caseName, " ", std::string(PrecisionName(r.precision)), ": ", r.wrong, " wrong of ", r.rays, " ", r.note);
-    CHECK(r.wrong == 0);
-    judged += r.rays;
-  }
-  CHECK(judged > 100000);
+  CHECK(RunAllRight(o) > 100000);
   // A bad value is an input error.
   const test::ScopedEnv bad("CELLRAY_OCTREE_LAZY", "sometimes");
   TraceConfig cfg;
