@@ -41,26 +41,12 @@ CR_SIMD_INLINE float HGrid_SkipExit(const GridHeader& g, const Ray& ray, const i
 }
 
 // The descent's test of kernels/hgrid.h: Box_Intersect of child grid g's
-// box from tmin up to the closest hit's Cull_Distance, Box_Slabs'
-// operations in its order; the entry parameter in tEnter.
+// box from tmin up to the closest hit's Cull_Distance; the entry parameter
+// in tEnter.
 template <bool kFast>
 CR_SIMD_INLINE bool HGrid_BoxEnter(const GridHeader& g, const Ray& ray, float tmin, float hitT, float& tEnter)
 {
-  float boxNear = -__builtin_inff(), boxFar = __builtin_inff();
-  for (int a = 0; a < 3; ++a) {
-    const float lo = (g.bmin[a] - ray.org[a]) * ray.inv[a];
-    const float hi = (g.bmax[a] - ray.org[a]) * ray.inv[a];
-    const bool neg = ray.inv[a] < 0.0f;
-    // fmax(boxNear, n) and fmin(boxFar, f): a NaN n or f (0 * inf on a
-    // plane-parallel ray from the plane) keeps the other.
-    const float tNear = neg ? hi : lo, tFar = neg ? lo : hi;
-    boxNear = tNear > boxNear ? tNear : boxNear;
-    boxFar = tFar < boxFar ? tFar : boxFar;
-  }
-  if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
-  const float cull = CullDistance<kFast>(hitT);
-  tEnter = boxNear > tmin ? boxNear : tmin;
-  return tEnter <= (boxFar < cull ? boxFar : cull);
+  return Box_SlabsOne<kFast>(g.bmin, g.bmax, ray, tmin, hitT, tEnter);
 }
 
 // An ancestor grid on a walk's stack: the cell the walk goes on from (what

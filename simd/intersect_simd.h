@@ -38,6 +38,29 @@ CR_SIMD_INLINE vfloat<N> CullDistance(vfloat<N> t)
   return t * vfloat<N>(1.0f + 0x1.0p-20f);
 }
 
+// Box_Slabs for one ray and one box (lo, hi), scalar: Box_Intersect from
+// tmin up to the closest hit's Cull_Distance, its operations in its order;
+// the entry parameter in tEnter. A NaN near or far distance (0 * inf on a
+// plane-parallel ray from the plane) keeps the other, as fmax/fmin do.
+template <bool kFast, class R>
+CR_SIMD_INLINE bool Box_SlabsOne(const float* lo, const float* hi, const R& ray, float tmin, float hitT,
+                                 float& tEnter)
+{
+  float boxNear = -__builtin_inff(), boxFar = __builtin_inff();
+  for (int a = 0; a < 3; ++a) {
+    const float l = (lo[a] - ray.org[a]) * ray.inv[a];
+    const float h = (hi[a] - ray.org[a]) * ray.inv[a];
+    const bool neg = ray.inv[a] < 0.0f;
+    const float tNear = neg ? h : l, tFar = neg ? l : h;
+    boxNear = tNear > boxNear ? tNear : boxNear;
+    boxFar = tFar < boxFar ? tFar : boxFar;
+  }
+  if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
+  const float cull = CullDistance<kFast>(hitT);
+  tEnter = boxNear > tmin ? boxNear : tmin;
+  return tEnter <= (boxFar < cull ? boxFar : cull);
+}
+
 // Box_Intersect after the per-axis plane distances: n[a], f[a] are the near
 // and far distances of axis a (already chosen by the sign of inv). The
 // accumulation starts at -inf / +inf and drops NaN (0 * inf on a

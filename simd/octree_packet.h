@@ -134,20 +134,8 @@ CR_SIMD_INLINE bool OctreeLeafBox_Hit(const KernelScene& sc, const OctreeNode& n
 {
   float box[6];
   OctreeLeafBox(sc, n, box);
-  float boxNear = -__builtin_inff(), boxFar = __builtin_inff();
-  for (int a = 0; a < 3; ++a) {
-    const float lo = (box[a] - ray.org[a]) * ray.inv[a];
-    const float hi = (box[3 + a] - ray.org[a]) * ray.inv[a];
-    const bool neg = ray.inv[a] < 0.0f;
-    // fmaxf(boxNear, n) and fminf(boxFar, f) without a call: n or f is NaN
-    // on a plane-parallel ray from the plane (0 * inf), and keeps the other.
-    const float tNear = neg ? hi : lo, tFar = neg ? lo : hi;
-    boxNear = tNear > boxNear ? tNear : boxNear;
-    boxFar = tFar < boxFar ? tFar : boxFar;
-  }
-  if constexpr (!kFast) boxFar = boxFar * 1.0000004f;
-  const float tn = boxNear > ray.tmin ? boxNear : ray.tmin, cull = CullDistance<kFast>(hitT);
-  return tn <= (boxFar < cull ? boxFar : cull);
+  float tEnter;
+  return Box_SlabsOne<kFast>(box, box + 3, ray, ray.tmin, hitT, tEnter);
 }
 
 // Octree_Leaf for the lanes of `lanes`: tests the references, and returns
