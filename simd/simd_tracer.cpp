@@ -129,7 +129,15 @@ KernelAccel KernelAccelOf(AccelKind k) { return static_cast<KernelAccel>(k); }
 // sahBlockSize for its 4-wide triangle leaves) unless --bvh-sah-block says
 // otherwise. On bumpy 10^7 it made 647 MiB of 744, 2.5 s of 3.4 to build;
 // with spheres and cones it cost (tree diffuse 1.6x the time), so other
-// scenes keep 1 (docs/SIMD.md `single`).
+// scenes keep 1 (docs/SIMD.md `single`). On a scene of triangles only, the
+// octree with ray margins (the new form; the classic octree stays the
+// baseline) splits leaves of more than kSimdOctreeLeaf references unless
+// --octree-leaf says otherwise: this backend tests a leaf's triangles 4 at
+// a time, so larger leaves and fewer of them pay (SIMD, one thread: bunny,
+// igea, dragon100k, sibenik, sponza 8-55% faster than at the builder's 12);
+// spheres and cones gain nothing (rings, tree 5-7% slower), and the
+// OpenCL kernels, which test one at a time, lose 6% (docs/ACCEL.md).
+inline constexpr int kSimdOctreeLeaf = 24;
 // The scene's primitive types, a bit per CR_PRIM_* (KernelKey::types).
 unsigned SceneTypes(const Scene& scene)
 {
@@ -141,8 +149,11 @@ unsigned SceneTypes(const Scene& scene)
 AccelParams SimdParams(const Scene& scene, const TraceConfig& cfg)
 {
   AccelParams p = cfg.params;
-  if (cfg.accel == AccelKind::BVH && p.bvhSahBlock == 0 && SceneTypes(scene) == 1u << CR_PRIM_TRIANGLE)
-    p.bvhSahBlock = 4;
+  const bool trianglesOnly = SceneTypes(scene) == 1u << CR_PRIM_TRIANGLE;
+  if (cfg.accel == AccelKind::BVH && p.bvhSahBlock == 0 && trianglesOnly) p.bvhSahBlock = 4;
+  if (cfg.accel == AccelKind::Octree && p.octreeLeaf == 0 && p.octreeMargin == "ray" && p.octreeBuild != "sah" &&
+      trianglesOnly)
+    p.octreeLeaf = kSimdOctreeLeaf;
   return p;
 }
 
@@ -450,16 +461,32 @@ class DelegatingTracer final : public Tracer {
 
 }  // namespace simd
 
+namespace {
+
+// Why this configuration runs on the scalar backend instead; empty when
+// the SIMD kernels run it.
+std::string WhyDelegated(const TraceConfig& config, simd::Isa isa)
+{
+  if (isa == simd::Isa::Scalar) return config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
+  if (config.precision == Precision::Fp64) return "fp64 delegated";
+  return {};
+}
+
+}  // namespace
+
+namespace simd {
+AccelParams SimdTracerParams(const Scene& scene, const TraceConfig& config)
+{
+  return WhyDelegated(config, ParseIsa(config.isa)).empty() ? SimdParams(scene, config) : config.params;
+}
+}  // namespace simd
+
 std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config)
 {
   using namespace simd;
   const Isa isa = ParseIsa(config.isa);
   const Variant variant = ParseVariant(config.variant);
-  std::string why;
-  if (isa == Isa::Scalar)
-    why = config.isa.empty() ? "no SIMD ISA on this CPU" : "--isa scalar";
-  else if (config.precision == Precision::Fp64)
-    why = "fp64 delegated";
+  const std::string why = WhyDelegated(config, isa);
   if (!why.empty()) return std::make_unique<DelegatingTracer>(CreateScalarTracer(scene, config), why);
   return std::make_unique<SimdTracer>(scene, config, isa, variant);
 }

@@ -148,7 +148,11 @@ TEST_CASE("hgrid: the teapot in a stadium refines where it crowds, and answers 0
 {
   const Scene scene = GenerateStadium(3);
   AccelInfo info;
-  const HGridData h = BuildHGrid(scene, AccelParams{}, info);
+  // At most 8 references a cell (the default is 16): a hierarchy of three
+  // levels or more here, whose layout and answers the test checks.
+  AccelParams params;
+  params.hgridLeaf = 8;
+  const HGridData h = BuildHGrid(scene, params, info);
   const int levels = CheckLayout(h);
   CHECK(levels >= 3);
   const auto rays = test::MakeRays(scene, RayKind::Primary, 64);

@@ -12,6 +12,7 @@
 #include <cstring>
 
 #include "host/accel/accel.h"
+#include "host/trace/tracer.h"
 #include "simd/isa.h"
 #include "tests/test_util.h"
 
@@ -123,11 +124,23 @@ std::vector<RayRecord> HGridSnappedRays(const Scene& scene, std::uint64_t n)
       n, 23);
 }
 
+// The structure's parameters as the SIMD backend builds it for this scene
+// (its own choices where cs leaves them at 0): the scalar side of a bit for
+// bit comparison builds the same structure.
+AccelParams SimdSideParams(const Scene& scene, const CellStructure& cs)
+{
+  TraceConfig cfg;
+  cfg.backend = Backend::Simd;
+  cfg.accel = cs.accel;
+  cfg.params = cs.params;
+  return BackendAccelParams(scene, cfg);
+}
+
 std::vector<RayRecord> SnappedRaysFor(const CellStructure& cs, const Scene& scene, std::uint64_t n)
 {
   if (cs.accel == AccelKind::Grid) return GridSnappedRays(scene, n);
   if (cs.accel == AccelKind::HGrid) return HGridSnappedRays(scene, n);
-  return OctreeSnappedRays(scene, cs.params, n);
+  return OctreeSnappedRays(scene, SimdSideParams(scene, cs), n);
 }
 
 std::vector<HitRecord> Trace(const Scene& scene, const TraceConfig& cfg, const std::vector<RayRecord>& rays,
@@ -165,7 +178,7 @@ TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions,
           TraceConfig scalarCfg;
           scalarCfg.backend = Backend::Scalar;
           scalarCfg.accel = cs.accel;
-          scalarCfg.params = cs.params;
+          scalarCfg.params = SimdSideParams(scene, cs);
           scalarCfg.precision = prec;
           const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion);
           std::size_t nHits = 0;
@@ -205,7 +218,7 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
         TraceConfig scalarCfg;
         scalarCfg.backend = Backend::Scalar;
         scalarCfg.accel = cs.accel;
-        scalarCfg.params = cs.params;
+        scalarCfg.params = SimdSideParams(scene, cs);
         scalarCfg.stats = true;
         TraceStatsSum want;
         const auto scalarHits = Trace(scene, scalarCfg, rays, occlusion, &want);

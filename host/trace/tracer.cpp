@@ -168,6 +168,9 @@ class ReferenceBackend final : public Tracer {
 
 std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig& config);
 std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config);
+namespace simd {
+AccelParams SimdTracerParams(const Scene& scene, const TraceConfig& config);
+}
 std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config);
 #ifdef CELLRAY_HAVE_EMBREE
 std::unique_ptr<Tracer> CreateEmbreeTracer(const Scene& scene, const TraceConfig& config);
@@ -287,6 +290,11 @@ std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& conf
   std::unique_ptr<Tracer> t = CreateBackend(scene, config);
   t->backend_ = config.backend;
   return t;
+}
+
+AccelParams BackendAccelParams(const Scene& scene, const TraceConfig& config)
+{
+  return config.backend == Backend::Simd ? simd::SimdTracerParams(scene, config) : config.params;
 }
 
 }  // namespace cr

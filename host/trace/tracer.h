@@ -143,4 +143,10 @@ class Tracer {
 
 std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& config);
 
+// The structure's parameters a backend builds with for this scene: the
+// configuration's, with the backend's own choices where they are left at 0
+// (the SIMD backend's: simd/simd_tracer.cpp SimdParams). Tests that compare
+// backends bit for bit build the other side with these.
+AccelParams BackendAccelParams(const Scene& scene, const TraceConfig& config);
+
 }  // namespace cr
