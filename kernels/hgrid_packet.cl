@@ -13,7 +13,7 @@
 /* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
  * no local memory of its own; the call runs on Trace_Packet's ray and hit
  * and hands the hit back through the lane's slot. */
-#define CR_PACKET_LOCALS_HGRID
+#define CR_PACKET_LOCALS_HGRID(X)
 #define CR_PACKET_PARAMS_HGRID
 #define CR_PACKET_ARGS_HGRID
 #define CR_PACKET_CALL_HGRID(hdr, nodes, refs)                 \

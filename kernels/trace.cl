@@ -242,27 +242,43 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 
 #if !defined(CR_VARIANT_RAY)
 
-/* The local memory of a packet traversal, declared at kernel scope (OpenCL
- * 1.2 allows __local variables only there): the lanes' rays and hits
+/* The local memory of a packet traversal: the lanes' rays and hits
  * (packet.cl), one word per lane, the group's state words, and what the
- * compiled structures' traversals need. The parameters and arguments that
- * pass them on follow the same pieces. */
+ * compiled structures' traversals need, each piece X(type, name, count).
+ * The pieces are carved from one __local kernel argument, the pool
+ * (CR_PACKET_LOCALS), of CR_PACKET_POOL_BYTES, which the host reads from
+ * Trace_PacketPoolBytes: declared at kernel scope instead, PoCL 3.1's
+ * work-group compiler (its automatic-locals pass, then LLVM 15's
+ * InstCombine) crashed inside clBuildProgram on the largest programs (the
+ * robust ray-margin octree's packet kernels with every primitive type;
+ * docs/OPENCL.md). Each piece starts on 8 bytes (real is double under
+ * CR_FP64). The parameters and arguments that pass them on follow the same
+ * pieces. */
 #define CR_PACKET_STATE_WORDS 12
-#define CR_PACKET_LOCALS_COMMON                             \
-  __local uint sLane[CR_PACKET_SIZE];                       \
-  __local uint sState[CR_PACKET_STATE_WORDS];               \
-  __local real sRay[CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE]; \
-  __local uint sAxes[CR_PACKET_AXES_FIELDS * CR_PACKET_SIZE];\
-  __local real sHit[CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE]; \
-  __local uint sHitG[CR_PACKET_SIZE]
+#define CR_PACKET_LOCALS_COMMON(X)                                                                           \
+  X(real, sRay, CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE) X(real, sHit, CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE) \
+  X(uint, sLane, CR_PACKET_SIZE) X(uint, sState, CR_PACKET_STATE_WORDS)                                     \
+  X(uint, sAxes, CR_PACKET_AXES_FIELDS * CR_PACKET_SIZE) X(uint, sHitG, CR_PACKET_SIZE)
+#define CR_POOL_PIECE_BYTES_(T, count) (((uint)sizeof(T) * (uint)(count) + 7u) & ~7u)
+#define CR_POOL_BYTES_(T, name, count) +CR_POOL_PIECE_BYTES_(T, count)
+#define CR_POOL_CARVE_(T, name, count)             \
+  __local T* name = (__local T*)(poolBytes + poolAt); \
+  poolAt += CR_POOL_PIECE_BYTES_(T, count);
+#define CR_PACKET_POOL_BYTES_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U(CR_POOL_BYTES_))
+#define CR_PACKET_POOL_CARVE_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U(CR_POOL_CARVE_))
+#define CR_PACKET_POOL_BYTES \
+  (0u CR_PACKET_LOCALS_COMMON(CR_POOL_BYTES_) CR_ACCEL_TYPES(CR_PACKET_POOL_BYTES_))
 #define CR_PACKET_PARAMS_COMMON                                                                                \
   __local uint *sLane, __local uint *sState, __local real *sRay, __local uint *sAxes, __local real *sHit, \
       __local uint *sHitG
 #define CR_PACKET_ARGS_COMMON sLane, sState, sRay, sAxes, sHit, sHitG
-#define CR_PACKET_LOCALS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U)
 #define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_PARAMS_##U)
 #define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_ARGS_##U)
-#define CR_PACKET_LOCALS CR_ACCEL_TYPES(CR_PACKET_LOCALS_) CR_PACKET_LOCALS_COMMON
+#define CR_PACKET_LOCALS                                   \
+  __local uchar* poolBytes = (__local uchar*)packetPool; \
+  uint poolAt = 0u;                                      \
+  CR_PACKET_LOCALS_COMMON(CR_POOL_CARVE_)                \
+  CR_ACCEL_TYPES(CR_PACKET_POOL_CARVE_)
 #define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_ACCEL_TYPES(CR_PACKET_PARAMS_)
 #define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_ACCEL_TYPES(CR_PACKET_ARGS_)
 
@@ -292,9 +308,9 @@ CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecor
  * Lanes past nRays take part without a ray. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_RaysPacket(
     CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
-    CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes)
+    CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes, __local ulong* packetPool)
 {
-  CR_PACKET_LOCALS;
+  CR_PACKET_LOCALS
   const uint i = (uint)get_global_id(0);
   const uint lid = (uint)get_local_id(0);
   const int live = i < nRays;
@@ -316,9 +332,9 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_
  * CR_PACKET_H screen tile. */
 __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void Trace_PrimaryPacket(
     CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 right, camreal4 up, camreal tanHalf, float tmin, int width,
-    int height, CR_GLOBAL HitRecord* hits, CR_GLOBAL TraceStats* stats)
+    int height, CR_GLOBAL HitRecord* hits, CR_GLOBAL TraceStats* stats, __local ulong* packetPool)
 {
-  CR_PACKET_LOCALS;
+  CR_PACKET_LOCALS
   const int px = (int)get_global_id(0), py = (int)get_global_id(1);
   const uint lid = (uint)get_local_id(1) * CR_PACKET_W + (uint)get_local_id(0);
   const int live = px < width && py < height;
@@ -334,4 +350,8 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
 }
 
 #endif
+
+/* The bytes of the packet kernels' pool (their last argument), for the
+ * host: one work-item writes them. */
+__kernel void Trace_PacketPoolBytes(CR_GLOBAL uint* out) { out[0] = CR_PACKET_POOL_BYTES; }
 #endif /* !CR_VARIANT_RAY */

@@ -63,6 +63,16 @@ using test::ScopedEnv;
 
 ScopedEnv TestCacheDir() { return test::OpenCLTestCacheDir(); }
 
+// The host's camera rays of a w x h image of the scene (what the device's
+// camera kernels generate).
+std::vector<RayRecord> HostCameraRays(const Scene& scene, int w, int h)
+{
+  RayGenOptions g;
+  g.width = w;
+  g.height = h;
+  return GenerateRays(scene, test::CachedReference(scene), g);
+}
+
 std::int64_t UlpDistance(float a, float b)
 {
   std::int32_t ia, ib;
@@ -344,10 +354,7 @@ TEST_CASE("opencl: primary rays generated on the device equal the host's" * doct
   auto cache = TestCacheDir();
   const Scene& scene = test::CachedScene(test::SpdPath("teapot"));
   const int w = 40, h = 30;
-  RayGenOptions g;
-  g.width = w;
-  g.height = h;
-  const auto rays = GenerateRays(scene, test::CachedReference(scene), g);
+  const auto rays = HostCameraRays(scene, w, h);
   TraceConfig sc;
   std::vector<HitRecord> ref;
   CreateTracer(scene, sc)->Trace(rays, ref, false, nullptr);
@@ -508,6 +515,38 @@ TEST_CASE("opencl: a scene without primitives misses everywhere, every structure
         CHECK(nHit == 0);
       }
     }
+}
+
+TEST_CASE("opencl: the every-type program of the robust ray-margin octree's packet kernels builds and answers "
+          "right" * doctest::skip(NoOpenCL()))
+{
+  // PoCL 3.1 crashed inside clBuildProgram (its work-group compile, LLVM's
+  // InstCombine) on this program while the packet kernels declared their
+  // local memory at kernel scope; they now take it as a __local argument
+  // (kernels/trace.cl CR_PACKET_LOCALS, docs/OPENCL.md). Both packet
+  // kernels: rays from a buffer and camera rays.
+  auto cache = TestCacheDir();
+  const test::ScopedEnv types("CELLRAY_CL_TYPES", "all");
+  const Scene& scene = test::CachedScene(test::SpdPath("balls"));
+  const int w = 24, h = 16;
+  const auto camera = HostCameraRays(scene, w, h);
+  const auto diffuse = test::MakeRays(scene, RayKind::Diffuse, 24);
+  TraceConfig cfg;
+  cfg.backend = Backend::OpenCL;
+  cfg.accel = AccelKind::Octree;
+  cfg.params.octreeMargin = "ray";
+  cfg.variant = "packet";
+  auto tracer = CreateTracer(scene, cfg);
+  std::vector<HitRecord> hits;
+  tracer->Trace(diffuse, hits, false, nullptr);
+  REQUIRE(hits.size() == diffuse.size());
+  CHECK(ref::CheckHits(test::CachedReference(scene), diffuse, hits, false).wrong == 0);
+  tracer->TracePrimary(MakeCameraFrame(scene.camera, w, h), w, h, hits, nullptr);
+  REQUIRE(hits.size() == camera.size());
+  CHECK(ref::CheckHits(test::CachedReference(scene), camera, hits, false).wrong == 0);
+  std::size_t nHit = 0;
+  for (const auto& x : hits) nHit += x.prim != CR_NO_HIT;
+  CHECK(nHit > camera.size() / 4);
 }
 
 TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * doctest::skip(NoOpenCL()))

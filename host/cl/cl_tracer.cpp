@@ -33,7 +33,15 @@ enum SceneArg : cl_uint {
   kArgUnified,
   kNumSceneArgs
 };
-enum RaysArg : cl_uint { kArgRays = kNumSceneArgs, kArgNRays, kArgRaysHits, kArgRaysStats, kArgTimes, kArgHasTimes };
+enum RaysArg : cl_uint {
+  kArgRays = kNumSceneArgs,
+  kArgNRays,
+  kArgRaysHits,
+  kArgRaysStats,
+  kArgTimes,
+  kArgHasTimes,
+  kArgRaysPool  // the packet kernel's local memory (kernels/trace.cl CR_PACKET_LOCALS)
+};
 enum PrimaryArg : cl_uint {
   kArgOrg = kNumSceneArgs,
   kArgForward,
@@ -44,7 +52,8 @@ enum PrimaryArg : cl_uint {
   kArgWidth,
   kArgHeight,
   kArgPrimaryHits,
-  kArgPrimaryStats
+  kArgPrimaryStats,
+  kArgPrimaryPool  // as kArgRaysPool
 };
 
 // The `accel` argument: the structure's position in CR_ACCEL_TYPES.
@@ -183,6 +192,7 @@ class ClTracer final : public Tracer {
     const char* raysName = "";
     const char* primaryName = "";
     bool hasRays = false, hasPrimary = false;
+    std::size_t poolBytes = 0;  // the packet kernels' local memory (Trace_PacketPoolBytes)
     double jitMs = 0.0;  // first (empty) launches: drivers that compile per work-group size do it here
   };
 
@@ -211,14 +221,17 @@ class ClTracer final : public Tracer {
     std::vector<std::string> names;
     if (b->hasRays) names.push_back(b->raysName);
     if (b->hasPrimary) names.push_back(b->primaryName);
+    if (packet) names.push_back(kPoolBytesName);
     b->program = BuildClProgram(cl_.context, cl_.dev, ClKernelSource(), ClBuildOptions(b->spec, cl_.dev), names);
     const std::size_t lw = std::size_t(b->spec.packetW), lh = std::size_t(b->spec.packetH);
     const auto t0 = std::chrono::steady_clock::now();
+    if (packet) b->poolBytes = PacketPoolBytes(b->program.kernels.back());
     // First launches, empty (no ray, 0x0 image): a driver that compiles each
     // kernel for its work-group size (PoCL) does it now, not in a timed Trace.
     std::size_t next = 0;
     if (b->hasRays) {
       b->rays = b->program.kernels[next++];
+      if (packet) SetArg(b->rays, kArgRaysPool, cl::Local(b->poolBytes), b->raysName);
       CheckKernel(*b, b->rays, b->raysName);
       SetArg(b->rays, kArgAnyHit, cl_int(occlusion), b->raysName);
       SetArg(b->rays, kArgRays, dummy_, b->raysName);
@@ -231,6 +244,7 @@ class ClTracer final : public Tracer {
     }
     if (b->hasPrimary) {
       b->primary = b->program.kernels[next++];
+      if (packet) SetArg(b->primary, kArgPrimaryPool, cl::Local(b->poolBytes), b->primaryName);
       CheckKernel(*b, b->primary, b->primaryName);
       SetArg(b->primary, kArgAnyHit, cl_int(0), b->primaryName);
       SetPrimaryArgs(b->primary, *b, MakeCameraFrame(scene_.camera, 1, 1), 0, 0);
@@ -241,6 +255,26 @@ class ClTracer final : public Tracer {
     CR_CL_CHECK(cl_.queue.finish(), "clFinish");
     b->jitMs = MsSince(t0);
     return b;
+  }
+
+  static constexpr const char* kPoolBytesName = "Trace_PacketPoolBytes";
+
+  // The bytes of local memory the program's packet kernels take as their
+  // last argument, as the program computes them (kernels/trace.cl
+  // CR_PACKET_POOL_BYTES: the pieces depend on the build's precision,
+  // structure and packet size).
+  std::size_t PacketPoolBytes(cl::Kernel& k)
+  {
+    cl_int err = CL_SUCCESS;
+    cl::Buffer out(cl_.context, CL_MEM_WRITE_ONLY, sizeof(cl_uint), nullptr, &err);
+    CR_CL_CHECK_WHAT(err, "clCreateBuffer", kPoolBytesName);
+    SetArg(k, 0, out, kPoolBytesName);
+    Launch(k, cl::NDRange(1), cl::NDRange(1), kPoolBytesName);
+    cl_uint bytes = 0;
+    CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(out, CL_TRUE, 0, sizeof bytes, &bytes), "clEnqueueReadBuffer",
+                     kPoolBytesName);
+    if (bytes == 0u) throw RuntimeError(fmt::format("OpenCL: {} reported 0 bytes of local memory", kPoolBytesName));
+    return bytes;
   }
 
   // Binds the scene to a kernel of the program and checks it against the
