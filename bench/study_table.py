@@ -56,11 +56,14 @@ def main():
         if not sel:
             continue
         out.append(f"\n**{be}** (Mrays/s, median of the timed runs; ratio = best grid form or octree / BVH)\n")
-        has_ray = any(r["accel"] == "octree-ray" for r in sel)
-        shown = [a for a in STRUCTS if a != "octree-ray" or has_ray]
-        out.append("| scene | kind | " + " | ".join(shown) + " | best grid / bvh | best octree / bvh "
-                   "| hgrid IT / TS | octree IT / TS | " + ("octree-ray IT / TS | " if has_ray else "") + "bvh IT / TS |")
-        out.append("|---|---|" + "---:|" * (len(shown) + 2) + "---:|" * (4 if has_ray else 3))
+        # Only the structures the runs hold get columns (a run without the
+        # classic octree shows no column of zeros for it).
+        present = {r["accel"] for r in sel}
+        shown = [a for a in STRUCTS if a in present]
+        measured = [a for a in ("hgrid", "octree", "octree-ray", "bvh") if a in present]
+        out.append("| scene | kind | " + " | ".join(shown) + " | best grid / bvh | best octree / bvh | " +
+                   " | ".join(f"{a} IT / TS" for a in measured) + " |")
+        out.append("|---|---|" + "---:|" * (len(shown) + 2 + len(measured)))
         grid_ratio, octree_ratio = [], []
         per_struct = {a: [] for a in STRUCTS}
         for s in scenes:
@@ -91,15 +94,17 @@ def main():
                     return f"{st.get('intersection_tests', float('nan')):.1f} / {st.get('traversal_steps', float('nan')):.1f}"
 
                 cells = " | ".join(f"{speed.get(a, 0.0):.2f}" for a in shown)
-                ray_cell = f" {measures('octree-ray')} |" if has_ray else ""
-                out.append(f"| {s} | {k} | {cells} | {g:.2f} | {o:.2f} | {measures('hgrid')} | {measures('octree')} "
-                           f"|{ray_cell} {measures('bvh')} |")
-        out.append("| geometric mean | |" + " |" * len(shown) + f" {gmean(grid_ratio):.2f} | {gmean(octree_ratio):.2f} |" +
-                   " |" * (4 if has_ray else 3))
+                ratio = lambda x: f"{x:.2f}" if x > 0 else "–"
+                out.append(f"| {s} | {k} | {cells} | {ratio(g)} | {ratio(o)} | " +
+                           " | ".join(measures(a) for a in measured) + " |")
+        mean = lambda v: f"{gmean(v):.2f}" if v else "–"
+        out.append("| geometric mean | |" + " |" * len(shown) + f" {mean(grid_ratio)} | {mean(octree_ratio)} |" +
+                   " |" * len(measured))
         out.append("")
-        out.append(f"{be}: rows at or above the bar ({BAR:.2f}): best grid form "
-                   f"{sum(r >= BAR for r in grid_ratio)} of {len(grid_ratio)}, best octree form "
-                   f"{sum(r >= BAR for r in octree_ratio)} of {len(octree_ratio)}; geometric means (Mrays/s): " +
+        def at_bar(name, v):
+            return f"best {name} form {sum(r >= BAR for r in v)} of {len(v)}" if v else f"no {name} rows"
+        out.append(f"{be}: rows at or above the bar ({BAR:.2f}): {at_bar('grid', grid_ratio)}, "
+                   f"{at_bar('octree', octree_ratio)}; geometric means (Mrays/s): " +
                    ", ".join(f"{a} {gmean(v):.2f}" for a, v in per_struct.items() if v))
     print("\n".join(out))
 
