@@ -175,11 +175,9 @@ CR_FUNC void BVHPacket_Trace(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uin
 
 /* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
  * this traversal's local memory (its pieces: X(type, name, count), carved
- * from the kernel's pool), parameters and arguments, and its call (the
- * names are Trace_Packet's). */
+ * from the kernel's pool; trace.cl passes them on as parameters of the
+ * same names) and its call (the names are Trace_Packet's). */
 #define CR_PACKET_LOCALS_BVH(X) X(uint, sBvhStack, CR_BVH_STACK) X(float, sBvhNode, CR_PACKET_NODE_FIELDS)
-#define CR_PACKET_PARAMS_BVH , __local uint *sBvhStack, __local float *sBvhNode
-#define CR_PACKET_ARGS_BVH , sBvhStack, sBvhNode
 #define CR_PACKET_CALL_BVH(hdr, nodes, refs)                                                                    \
   BVHPacket_Trace(nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sBvhStack, sLane, sState, sBvhNode, sRay, \
                   sAxes, sHit, sHitG)

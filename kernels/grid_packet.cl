@@ -122,11 +122,9 @@ CR_FUNC void GridPacket_Trace(CR_GLOBAL const GridHeader* grid, CR_GLOBAL const 
 
 /* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
  * this traversal's local memory (its pieces: X(type, name, count), carved
- * from the kernel's pool), parameters and arguments, and its call (the
- * names are Trace_Packet's). */
+ * from the kernel's pool; trace.cl passes them on as parameters of the
+ * same names) and its call (the names are Trace_Packet's). */
 #define CR_PACKET_LOCALS_GRID(X) X(int, sGridCell, 3 * CR_PACKET_SIZE) X(uint, sGridRange, 2 * CR_PACKET_SIZE)
-#define CR_PACKET_PARAMS_GRID , __local int *sGridCell, __local uint *sGridRange
-#define CR_PACKET_ARGS_GRID , sGridCell, sGridRange
 #define CR_PACKET_CALL_GRID(hdr, nodes, refs)                                                                     \
   GridPacket_Trace(hdr, nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sLane, sState, sGridCell, sGridRange, \
                    sRay, sAxes, sHit, sHitG)

@@ -14,8 +14,6 @@
  * no local memory of its own; the call runs on Trace_Packet's ray and hit
  * and hands the hit back through the lane's slot. */
 #define CR_PACKET_LOCALS_HGRID(X)
-#define CR_PACKET_PARAMS_HGRID
-#define CR_PACKET_ARGS_HGRID
 #define CR_PACKET_CALL_HGRID(hdr, nodes, refs)                 \
   if (live) {                                                  \
     ray.anyHit = anyHit;                                       \

@@ -232,12 +232,10 @@ CR_FUNC void OctreePacket_Trace(CR_GLOBAL const OctreeHeader* hdr, CR_GLOBAL con
 
 /* For the dispatch trace.cl generates from CR_ACCEL_TYPES (Trace_Packet):
  * this traversal's local memory (its pieces: X(type, name, count), carved
- * from the kernel's pool), parameters and arguments, and its call (the
- * names are Trace_Packet's). */
+ * from the kernel's pool; trace.cl passes them on as parameters of the
+ * same names) and its call (the names are Trace_Packet's). */
 #define CR_PACKET_LOCALS_OCTREE(X) \
   X(uint, sOctStack, CR_OCTREE_PACKET_STACK * CR_OCTREE_PACKET_ENTRY) X(float, sOctPlane, CR_OCTREE_PACKET_PLANES)
-#define CR_PACKET_PARAMS_OCTREE , __local uint *sOctStack, __local float *sOctPlane
-#define CR_PACKET_ARGS_OCTREE , sOctStack, sOctPlane
 #define CR_PACKET_CALL_OCTREE(hdr, nodes, refs)                                                                 \
   OctreePacket_Trace(hdr, nodes, refs, pv, anyHit, st, live, lid, CR_PACKET_SIZE, sOctStack, sOctPlane, sLane,    \
                      sState, sRay, sAxes, sHit, sHitG)

@@ -252,8 +252,7 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
  * InstCombine) crashed inside clBuildProgram on the largest programs (the
  * robust ray-margin octree's packet kernels with every primitive type;
  * docs/OPENCL.md). Each piece starts on 8 bytes (real is double under
- * CR_FP64). The parameters and arguments that pass them on follow the same
- * pieces. */
+ * CR_FP64). */
 #define CR_PACKET_STATE_WORDS 12
 #define CR_PACKET_LOCALS_COMMON(X)                                                                           \
   X(real, sRay, CR_PACKET_RAY_FIELDS * CR_PACKET_SIZE) X(real, sHit, CR_PACKET_HIT_FIELDS * CR_PACKET_SIZE) \
@@ -268,24 +267,24 @@ __kernel void Trace_Primary(CR_SCENE_PARAMS, float4 org, camreal4 fwd, camreal4 
 #define CR_PACKET_POOL_CARVE_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U(CR_POOL_CARVE_))
 #define CR_PACKET_POOL_BYTES \
   (0u CR_PACKET_LOCALS_COMMON(CR_POOL_BYTES_) CR_ACCEL_TYPES(CR_PACKET_POOL_BYTES_))
-#define CR_PACKET_PARAMS_COMMON                                                                                \
-  __local uint *sLane, __local uint *sState, __local real *sRay, __local uint *sAxes, __local real *sHit, \
-      __local uint *sHitG
-#define CR_PACKET_ARGS_COMMON sLane, sState, sRay, sAxes, sHit, sHitG
-#define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_PARAMS_##U)
-#define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_ARGS_##U)
+#define CR_POOL_PARAM_(T, name, count) , __local T* name
+#define CR_POOL_ARG_(T, name, count) , name
+#define CR_PACKET_PARAMS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U(CR_POOL_PARAM_))
+#define CR_PACKET_ARGS_(N, U, l, H, Nd) CR_CAT(CR_IF_, CR_WITH_##U)(CR_PACKET_LOCALS_##U(CR_POOL_ARG_))
 #define CR_PACKET_LOCALS                                   \
   __local uchar* poolBytes = (__local uchar*)packetPool; \
   uint poolAt = 0u;                                      \
   CR_PACKET_LOCALS_COMMON(CR_POOL_CARVE_)                \
   CR_ACCEL_TYPES(CR_PACKET_POOL_CARVE_)
-#define CR_PACKET_PARAMS CR_PACKET_PARAMS_COMMON CR_ACCEL_TYPES(CR_PACKET_PARAMS_)
-#define CR_PACKET_ARGS CR_PACKET_ARGS_COMMON CR_ACCEL_TYPES(CR_PACKET_ARGS_)
+/* The parameters that pass the pieces on, and the arguments: each begins
+ * with its comma. */
+#define CR_PACKET_PARAMS CR_PACKET_LOCALS_COMMON(CR_POOL_PARAM_) CR_ACCEL_TYPES(CR_PACKET_PARAMS_)
+#define CR_PACKET_ARGS CR_PACKET_LOCALS_COMMON(CR_POOL_ARG_) CR_ACCEL_TYPES(CR_PACKET_ARGS_)
 
 /* The hit of one lane's ray after the group's packet traversal of the
  * structure the build (or `accel`, the same for the whole group) selects. */
 CR_FUNC Hit Trace_Packet(const PrimView* pv, CR_TRACE_ONE_PARAMS, const RayRecord* rec, float time, int live, uint lid,
-                         int anyHit, TraceStats* st, CR_PACKET_PARAMS)
+                         int anyHit, TraceStats* st CR_PACKET_PARAMS)
 {
   Ray ray;
   Ray_Init(&ray, rec);
@@ -318,7 +317,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_SIZE, 1, 1))) void Trace_
   const RayRecord rec = Trace_LoadRay(rays, live ? i : 0);
   TraceStats st = {0, 0, 0, 0};
   const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, Trace_Time(times, hasTimes, live ? i : 0u), live, lid,
-                               CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
+                               CR_QUERY_ANYHIT, &st CR_PACKET_ARGS);
   if (live) {
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
     Trace_StoreStats(stats, i, &st);
@@ -341,7 +340,7 @@ __kernel __attribute__((reqd_work_group_size(CR_PACKET_W, CR_PACKET_H, 1))) void
   const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
   const RayRecord rec = Camera_Ray(org, fwd, right, up, tanHalf, tmin, live ? px : 0, live ? py : 0, width, height);
   TraceStats st = {0, 0, 0, 0};
-  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, 0.0f, live, lid, CR_QUERY_ANYHIT, &st, CR_PACKET_ARGS);
+  const Hit hit = Trace_Packet(&pv, CR_TRACE_ONE_ARGS, &rec, 0.0f, live, lid, CR_QUERY_ANYHIT, &st CR_PACKET_ARGS);
   if (live) {
     const uint i = (uint)py * (uint)width + (uint)px;
     Trace_StoreHit(hits, i, Hit_ToRecord(&hit, &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
