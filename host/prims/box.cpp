@@ -95,8 +95,8 @@ int RefRoots(const ref::DRay& r, const Box& b, double t[2], double*, double*)
   double tn = -INFINITY, tf = INFINITY;
   for (int a = 0; a < 3; ++a) {
     const double t0 = (double(b.lo[a]) - r.o[a]) / r.d[a], t1 = (double(b.hi[a]) - r.o[a]) / r.d[a];
-    tn = std::fmax(tn, std::fmin(t0, t1));
-    tf = std::fmin(tf, std::fmax(t0, t1));
+    tn = cr::fmax(tn, cr::fmin(t0, t1));
+    tf = cr::fmin(tf, cr::fmax(t0, t1));
   }
   if (!(tn <= tf)) return 0;
   t[0] = tn;

@@ -60,8 +60,8 @@ bool BoundInterval(const Sdf& s, const ref::DRay& r, double& t0, double& t1)
   t1 = r.tmax;
   for (int a = 0; a < 3; ++a) {
     const double ta = (double(s.lo[a]) - r.o[a]) / r.d[a], tb = (double(s.hi[a]) - r.o[a]) / r.d[a];
-    t0 = std::fmax(t0, std::fmin(ta, tb));
-    t1 = std::fmin(t1, std::fmax(ta, tb));
+    t0 = cr::fmax(t0, cr::fmin(ta, tb));
+    t1 = cr::fmin(t1, cr::fmax(ta, tb));
   }
   return t0 <= t1;
 }

@@ -31,8 +31,8 @@ SdfMarchCount CountSdfMarches(const Scene& scene, const std::vector<RayRecord>& 
         float t0 = r.tmin, t1 = end;
         for (int a = 0; a < 3; ++a) {
           const float ta = (s.lo[a] - r.org[a]) / r.dir[a], tb = (s.hi[a] - r.org[a]) / r.dir[a];
-          t0 = std::fmax(t0, std::fmin(ta, tb));
-          t1 = std::fmin(t1, std::fmax(ta, tb));
+          t0 = cr::fmax(t0, cr::fmin(ta, tb));
+          t1 = cr::fmin(t1, cr::fmax(ta, tb));
         }
         if (!(t0 <= t1)) continue;
         float th = 0.0f;

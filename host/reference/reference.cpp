@@ -96,11 +96,11 @@ void ReferenceTracer::Traverse(const DRay& ray, double& tmax, Visit&& visit) con
       double t0 = (node.lo[a] - ray.o[a]) * ray.inv[a];
       double t1 = (node.hi[a] - ray.o[a]) * ray.inv[a];
       if (ray.inv[a] < 0.0) std::swap(t0, t1);
-      bn = std::fmax(bn, t0);
-      bf = std::fmin(bf, t1);
+      bn = cr::fmax(bn, t0);
+      bf = cr::fmin(bf, t1);
     }
-    tn = std::fmax(tn, bn);
-    tf = std::fmin(tf, bf * kFarScale);
+    tn = cr::fmax(tn, bn);
+    tf = cr::fmin(tf, bf * kFarScale);
     if (!(tn <= tf)) continue;
     if (node.count > 0) {
       for (std::uint32_t i = 0; i < node.count; ++i)
