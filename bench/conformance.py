@@ -67,7 +67,7 @@ def main():
                         name, _, opt = backend.partition(":")
                         extra = []
                         if opt:
-                            extra = ["--isa" if name == "simd" and opt in ("sse4", "avx2") else "--variant", opt]
+                            extra = ["--isa" if name == "simd" and opt in ("sse4", "avx2", "avx512") else "--variant", opt]
                         t = run([a.bin, "trace", path, "--rays", rays, "--accel", accel, "--backend", name,
                                  "--precision", a.precision, "-o", hits] + occ + extra)
                         c = run([a.bin, "check", path, "--rays", rays, "--hits", hits] + occ)

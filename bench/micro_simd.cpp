@@ -166,13 +166,9 @@ void BM_SingleBoxes(benchmark::State& state, KernelProbes pr, bool fast)
 int RegisterAll()
 {
 #if defined(CELLRAY_SIMD_X86)
-  std::vector<std::pair<const char*, KernelProbes>> isas;
-#if defined(CELLRAY_SIMD_SSE4)
-  if (simd::IsaSupported(simd::Isa::Sse4)) isas.emplace_back("sse4", simd::sse4::Probes());
-#endif
-#if defined(CELLRAY_SIMD_AVX2)
-  if (simd::IsaSupported(simd::Isa::Avx2)) isas.emplace_back("avx2", simd::avx2::Probes());
-#endif
+  std::vector<std::pair<std::string, KernelProbes>> isas;
+  for (const std::string& isa : simd::SupportedVectorIsas())
+    isas.emplace_back(isa, simd::IsaProbes(simd::ParseIsa(isa)));
   for (const auto& [isa, pr] : isas) {
     for (bool fast : {false, true}) {
       const char* mode = fast ? "Fast" : "Robust";

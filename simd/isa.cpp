@@ -22,12 +22,22 @@ bool IsaSupported(Isa isa)
 #else
     case Isa::Avx2: return false;
 #endif
+#if defined(CELLRAY_SIMD_AVX512)
+    case Isa::Avx512:
+      __builtin_cpu_init();
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("avx512f") &&
+             __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+             __builtin_cpu_supports("avx512bw");
+#else
+    case Isa::Avx512: return false;
+#endif
   }
   return false;
 }
 
 Isa BestIsa()
 {
+  if (IsaSupported(Isa::Avx512)) return Isa::Avx512;
   if (IsaSupported(Isa::Avx2)) return Isa::Avx2;
   if (IsaSupported(Isa::Sse4)) return Isa::Sse4;
   return Isa::Scalar;
@@ -39,6 +49,7 @@ const char* IsaName(Isa isa)
     case Isa::Scalar: return "scalar";
     case Isa::Sse4: return "sse4";
     case Isa::Avx2: return "avx2";
+    case Isa::Avx512: return "avx512";
   }
   return "?";
 }
@@ -47,14 +58,16 @@ Isa ParseIsa(const std::string& name)
 {
   if (name.empty()) return BestIsa();
   Isa isa;
-  if (name == "avx2")
+  if (name == "avx512")
+    isa = Isa::Avx512;
+  else if (name == "avx2")
     isa = Isa::Avx2;
   else if (name == "sse4")
     isa = Isa::Sse4;
   else if (name == "scalar")
     isa = Isa::Scalar;
   else
-    throw InputError(fmt::format("unknown --isa '{}' (expected avx2, sse4 or scalar)", name));
+    throw InputError(fmt::format("unknown --isa '{}' (expected avx512, avx2, sse4 or scalar)", name));
   if (!IsaSupported(isa))
     throw InputError(fmt::format("--isa {}: this CPU (or build) does not support it; best available is {}", name,
                                  IsaName(BestIsa())));
@@ -64,7 +77,7 @@ Isa ParseIsa(const std::string& name)
 std::vector<std::string> SupportedVectorIsas()
 {
   std::vector<std::string> out;
-  for (Isa isa : {Isa::Sse4, Isa::Avx2})
+  for (Isa isa : {Isa::Sse4, Isa::Avx2, Isa::Avx512})
     if (IsaSupported(isa)) out.push_back(IsaName(isa));
   return out;
 }

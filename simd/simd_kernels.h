@@ -1,6 +1,6 @@
 // The boundary between the SIMD tracer (plain C++, no ISA flags) and the
-// kernels compiled once per ISA (kernels_sse4*.cpp with -msse4.1,
-// kernels_avx2*.cpp with -mavx2 -mfma). Only plain data crosses it: no
+// kernels compiled once per ISA (kernels_*.cpp with -msse4.1, with
+// -mavx2 -mfma, and with the AVX-512 flags). Only plain data crosses it: no
 // standard-library templates are instantiated on the ISA side, so no inline
 // function compiled with AVX2 can be picked by the linker for the rest of the
 // program.
@@ -156,7 +156,7 @@ struct KernelProbes {
 enum class PacketOrder { Input, DirectionClasses, DirectionClassesWhenPays };
 
 // Each ISA's kernels: Probes() also tells its widths (SSE4: N = 4, K = 4;
-// AVX2: N = 8, K = 4), from which the tracer builds the matching wide BVH.
+// AVX2 and AVX-512: N = 8, K = 8), from which the tracer builds the matching wide BVH.
 // Select<Name>Kernel for each structure of CR_ACCEL_TYPES gives either
 // variant (key.packet; the BVH's from SelectPacketKernel and
 // SelectSingleKernel, which walk different layouts), nullptr when the scene
@@ -177,7 +177,13 @@ enum class PacketOrder { Input, DirectionClasses, DirectionClassesWhenPays };
   }
 CR_DECLARE_SIMD_ISA(sse4)
 CR_DECLARE_SIMD_ISA(avx2)
+CR_DECLARE_SIMD_ISA(avx512)
 #undef CR_DECLARE_SIMD_SELECT_
 #undef CR_DECLARE_SIMD_ISA
+
+// The probes of an ISA's kernels (simd_tracer.cpp), for tests and
+// micro benchmarks; RuntimeError where this build lacks the ISA's kernels.
+enum class Isa;
+KernelProbes IsaProbes(Isa isa);
 
 }  // namespace cr::simd

@@ -101,6 +101,12 @@ IsaEntry EntryOf(Isa isa)
 #define CR_SIMD_ENTRY_                                                               \
   {{CR_ACCEL_TYPES(CR_SIMD_ENTRY_SELECT_)}, {CR_ACCEL_TYPES(CR_SIMD_ENTRY_MOTION_)}, \
    {CR_ACCEL_TYPES(CR_SIMD_ENTRY_ORDER_)}, &ns::Probes}
+#if defined(CELLRAY_SIMD_AVX512)
+  if (isa == Isa::Avx512) {
+    namespace ns = avx512;
+    return CR_SIMD_ENTRY_;
+  }
+#endif
 #if defined(CELLRAY_SIMD_AVX2)
   if (isa == Isa::Avx2) {
     namespace ns = avx2;
@@ -120,6 +126,12 @@ IsaEntry EntryOf(Isa isa)
 #endif
   throw RuntimeError(fmt::format("simd: no kernels for isa {}", IsaName(isa)));
 }
+
+}  // namespace
+
+KernelProbes IsaProbes(Isa isa) { return EntryOf(isa).probes(); }
+
+namespace {
 
 // The kernels' name for a structure (the same list, the same order).
 KernelAccel KernelAccelOf(AccelKind k) { return static_cast<KernelAccel>(k); }

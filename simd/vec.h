@@ -1,5 +1,5 @@
 // Width-templated SIMD wrappers in the style of Embree's vfloat<N>, vint<N>,
-// vbool<N>: N = 4 (SSE4.1) and N = 8 (AVX2). The only place besides the
+// vbool<N>: N = 4 (SSE4.1) and N = 8 (AVX2; AVX-512, the same wrappers). The only place besides the
 // kernels of simd/ where intrinsics appear.
 //
 // Every translation unit that includes this header is compiled for one ISA,
@@ -17,14 +17,21 @@
 // fminf/fmaxf (a NaN operand is ignored).
 #pragma once
 
-#if defined(__AVX2__) && defined(__FMA__)
+#if defined(__AVX512F__) && defined(__AVX512VL__) && defined(__AVX512DQ__) && defined(__AVX512BW__)
+// The AVX2 wrappers, eight lanes, compiled with AVX-512VL: EVEX encodings
+// with 32 vector registers (the single-ray BVH walk spilled its ray with
+// 16) and mask-register compares where the compiler picks them; no 512-bit
+// vectors (-mprefer-vector-width=256, simd/CMakeLists.txt). Same answers.
+#define CR_SIMD_NS avx512
+#define CR_SIMD_WIDTH 8
+#elif defined(__AVX2__) && defined(__FMA__)
 #define CR_SIMD_NS avx2
 #define CR_SIMD_WIDTH 8
 #elif defined(__SSE4_1__)
 #define CR_SIMD_NS sse4
 #define CR_SIMD_WIDTH 4
 #else
-#error "simd/vec.h needs -msse4.1 or -mavx2 -mfma (the ISA units of simd/CMakeLists.txt)"
+#error "simd/vec.h needs -msse4.1, -mavx2 -mfma or the AVX-512 flags (the ISA units of simd/CMakeLists.txt)"
 #endif
 // Primitives per pack of the wide BVH's leaves (K): the ISA's width (AVX2
 // 8, SSE4 4). AVX2 packs of 8 against 4: 0.967 of the time over 10 scenes x

@@ -1,10 +1,40 @@
 // vfloat<8>, vint<8>, vbool<8> on AVX2 (included by simd/vec.h when
-// compiling with -mavx2). No FMA instruction is used: the scalar kernels
+// compiling with -mavx2; with AVX-512VL too, where vbool<8> is a mask
+// register). No FMA instruction is used: the scalar kernels
 // round after every multiply (-ffp-contract=off).
 #pragma once
 
 namespace cr::simd::CR_SIMD_NS {
 
+#if defined(__AVX512VL__)
+// With AVX-512VL (the avx512 unit, simd/vec.h) a lane mask lives in a mask
+// register: compares write it, blends and masked moves read it, and its bits
+// are the mask itself (no movemask).
+template <>
+struct vbool<8> {
+  __mmask8 k;
+  vbool() = default;
+  explicit vbool(__mmask8 x) : k(x) {}
+  explicit vbool(bool b) : k(b ? __mmask8(0xFF) : __mmask8(0)) {}
+  static vbool FromBits(unsigned bits) { return vbool(__mmask8(bits)); }
+  unsigned Bits() const { return unsigned(k); }
+  static constexpr unsigned kAll = 0xFFu;
+};
+CR_SIMD_INLINE vbool<8> operator&(vbool<8> a, vbool<8> b) { return vbool<8>(__mmask8(a.k & b.k)); }
+CR_SIMD_INLINE vbool<8> operator|(vbool<8> a, vbool<8> b) { return vbool<8>(__mmask8(a.k | b.k)); }
+CR_SIMD_INLINE vbool<8> operator^(vbool<8> a, vbool<8> b) { return vbool<8>(__mmask8(a.k ^ b.k)); }
+CR_SIMD_INLINE vbool<8> operator!(vbool<8> a) { return vbool<8>(__mmask8(~a.k)); }
+CR_SIMD_INLINE vbool<8> AndNot(vbool<8> a, vbool<8> b) { return vbool<8>(__mmask8(a.k & ~b.k)); }
+CR_SIMD_INLINE bool Any(vbool<8> a) { return a.k != 0; }
+CR_SIMD_INLINE bool None(vbool<8> a) { return a.k == 0; }
+CR_SIMD_INLINE bool All(vbool<8> a) { return a.k == 0xFF; }
+template <int P>
+CR_SIMD_INLINE vbool<8> CmpPs8(__m256 a, __m256 b) { return vbool<8>(_mm256_cmp_ps_mask(a, b, P)); }
+CR_SIMD_INLINE vbool<8> CmpEq8(__m256i a, __m256i b) { return vbool<8>(_mm256_cmpeq_epi32_mask(a, b)); }
+CR_SIMD_INLINE vbool<8> CmpGt8(__m256i a, __m256i b) { return vbool<8>(_mm256_cmpgt_epi32_mask(a, b)); }
+CR_SIMD_INLINE __m256 Blend8(vbool<8> m, __m256 a, __m256 b) { return _mm256_mask_blend_ps(m.k, b, a); }
+CR_SIMD_INLINE __m256i MaskZ8(vbool<8> m, __m256i a) { return _mm256_maskz_mov_epi32(m.k, a); }
+#else
 template <>
 struct vbool<8> {
   __m256 m;
@@ -32,6 +62,16 @@ CR_SIMD_INLINE bool Any(vbool<8> a) { return _mm256_movemask_ps(a.m) != 0; }
 CR_SIMD_INLINE bool None(vbool<8> a) { return _mm256_movemask_ps(a.m) == 0; }
 CR_SIMD_INLINE bool All(vbool<8> a) { return _mm256_movemask_ps(a.m) == 0xFF; }
 
+template <int P>
+CR_SIMD_INLINE vbool<8> CmpPs8(__m256 a, __m256 b) { return vbool<8>(_mm256_cmp_ps(a, b, P)); }
+CR_SIMD_INLINE vbool<8> CmpEq8(__m256i a, __m256i b) { return vbool<8>(_mm256_castsi256_ps(_mm256_cmpeq_epi32(a, b))); }
+CR_SIMD_INLINE vbool<8> CmpGt8(__m256i a, __m256i b) { return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a, b))); }
+// a where m, else b.
+CR_SIMD_INLINE __m256 Blend8(vbool<8> m, __m256 a, __m256 b) { return _mm256_blendv_ps(b, a, m.m); }
+// a where m, else 0.
+CR_SIMD_INLINE __m256i MaskZ8(vbool<8> m, __m256i a) { return _mm256_and_si256(_mm256_castps_si256(m.m), a); }
+#endif
+
 template <>
 struct vfloat<8> {
   __m256 v;
@@ -53,16 +93,16 @@ CR_SIMD_INLINE vfloat<8> operator-(vfloat<8> a, vfloat<8> b) { return vfloat<8>(
 CR_SIMD_INLINE vfloat<8> operator*(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_mul_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<8> operator/(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_div_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<8> operator-(vfloat<8> a) { return vfloat<8>(_mm256_xor_ps(a.v, _mm256_set1_ps(-0.0f))); }
-CR_SIMD_INLINE vbool<8> operator<(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_LT_OQ)); }
-CR_SIMD_INLINE vbool<8> operator<=(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_LE_OQ)); }
-CR_SIMD_INLINE vbool<8> operator>(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_GT_OQ)); }
-CR_SIMD_INLINE vbool<8> operator>=(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_GE_OQ)); }
-CR_SIMD_INLINE vbool<8> operator==(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_EQ_OQ)); }
-CR_SIMD_INLINE vbool<8> operator!=(vfloat<8> a, vfloat<8> b) { return vbool<8>(_mm256_cmp_ps(a.v, b.v, _CMP_NEQ_UQ)); }
-CR_SIMD_INLINE vbool<8> IsNaN(vfloat<8> a) { return vbool<8>(_mm256_cmp_ps(a.v, a.v, _CMP_UNORD_Q)); }
+CR_SIMD_INLINE vbool<8> operator<(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_LT_OQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> operator<=(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_LE_OQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> operator>(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_GT_OQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> operator>=(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_GE_OQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> operator==(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_EQ_OQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> operator!=(vfloat<8> a, vfloat<8> b) { return CmpPs8<_CMP_NEQ_UQ>(a.v, b.v); }
+CR_SIMD_INLINE vbool<8> IsNaN(vfloat<8> a) { return CmpPs8<_CMP_UNORD_Q>(a.v, a.v); }
 CR_SIMD_INLINE vfloat<8> Select(vbool<8> m, vfloat<8> a, vfloat<8> b)
 {
-  return vfloat<8>(_mm256_blendv_ps(b.v, a.v, m.m));
+  return vfloat<8>(Blend8(m, a.v, b.v));
 }
 CR_SIMD_INLINE vfloat<8> Min(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_min_ps(a.v, b.v)); }
 CR_SIMD_INLINE vfloat<8> Max(vfloat<8> a, vfloat<8> b) { return vfloat<8>(_mm256_max_ps(a.v, b.v)); }
@@ -108,28 +148,18 @@ struct vint<8> {
 };
 CR_SIMD_INLINE vint<8> operator+(vint<8> a, vint<8> b) { return vint<8>(_mm256_add_epi32(a.v, b.v)); }
 CR_SIMD_INLINE vint<8> operator*(vint<8> a, vint<8> b) { return vint<8>(_mm256_mullo_epi32(a.v, b.v)); }
-CR_SIMD_INLINE vbool<8> operator==(vint<8> a, vint<8> b)
-{
-  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpeq_epi32(a.v, b.v)));
-}
+CR_SIMD_INLINE vbool<8> operator==(vint<8> a, vint<8> b) { return CmpEq8(a.v, b.v); }
 CR_SIMD_INLINE vbool<8> LessUnsigned(vint<8> a, vint<8> b)
 {
-  const __m256i le = _mm256_cmpeq_epi32(_mm256_min_epu32(a.v, b.v), a.v);
-  return AndNot(vbool<8>(_mm256_castsi256_ps(le)), a == b);
+  return AndNot(CmpEq8(_mm256_min_epu32(a.v, b.v), a.v), a == b);
 }
 CR_SIMD_INLINE vint<8> Select(vbool<8> m, vint<8> a, vint<8> b)
 {
-  return vint<8>(_mm256_castps_si256(_mm256_blendv_ps(_mm256_castsi256_ps(b.v), _mm256_castsi256_ps(a.v), m.m)));
+  return vint<8>(_mm256_castps_si256(Blend8(m, _mm256_castsi256_ps(a.v), _mm256_castsi256_ps(b.v))));
 }
 CR_SIMD_INLINE vint<8> operator-(vint<8> a, vint<8> b) { return vint<8>(_mm256_sub_epi32(a.v, b.v)); }
-CR_SIMD_INLINE vbool<8> operator<(vint<8> a, vint<8> b)
-{
-  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(b.v, a.v)));
-}
-CR_SIMD_INLINE vbool<8> operator>(vint<8> a, vint<8> b)
-{
-  return vbool<8>(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a.v, b.v)));
-}
+CR_SIMD_INLINE vbool<8> operator<(vint<8> a, vint<8> b) { return CmpGt8(b.v, a.v); }
+CR_SIMD_INLINE vbool<8> operator>(vint<8> a, vint<8> b) { return CmpGt8(a.v, b.v); }
 // lo = base[idx], hi = base[idx + 1] per lane (idx >= 0): one 8-byte load per lane.
 CR_SIMD_INLINE void GatherPairs(const std::uint32_t* base, vint<8> idx, vint<8>& lo, vint<8>& hi)
 {
@@ -158,7 +188,7 @@ CR_SIMD_INLINE vint<8> And(vint<8> a, vint<8> b) { return vint<8>(_mm256_and_si2
 CR_SIMD_INLINE vint<8> ShiftRight(vint<8> a, vint<8> n) { return vint<8>(_mm256_srlv_epi32(a.v, n.v)); }
 CR_SIMD_INLINE vint<8> MaskedOrZero(vbool<8> m, vint<8> a)
 {
-  return vint<8>(_mm256_and_si256(_mm256_castps_si256(m.m), a.v));
+  return vint<8>(MaskZ8(m, a.v));
 }
 CR_SIMD_INLINE vfloat<8> ToFloat(vint<8> a) { return vfloat<8>(_mm256_cvtepi32_ps(a.v)); }
 CR_SIMD_INLINE vint<8> FloorToInt(vfloat<8> x) { return vint<8>(_mm256_cvttps_epi32(_mm256_floor_ps(x.v))); }

@@ -236,9 +236,8 @@ TEST_CASE("simd: ISA and variant selection, delegation and errors")
   cfg.variant = "sideways";
   CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);
   cfg.variant = "";
-  for (const char* isa : {"sse4", "avx2"}) {
-    cfg.isa = isa;
-    const simd::Isa want = std::string(isa) == "avx2" ? simd::Isa::Avx2 : simd::Isa::Sse4;
+  for (const simd::Isa want : {simd::Isa::Sse4, simd::Isa::Avx2, simd::Isa::Avx512}) {
+    cfg.isa = simd::IsaName(want);
     const bool supported = simd::IsaSupported(want);
     if (supported)
       CHECK_NOTHROW(CreateTracer(scene, cfg));

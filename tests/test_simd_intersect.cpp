@@ -154,14 +154,7 @@ Tally ProbePrims(const KernelProbes& pr, const simd::ProbeScene& ps, const std::
 std::vector<KernelProbes> AvailableProbes()
 {
   std::vector<KernelProbes> out;
-#if defined(CELLRAY_SIMD_X86)
-#if defined(CELLRAY_SIMD_SSE4)
-  if (simd::IsaSupported(simd::Isa::Sse4)) out.push_back(simd::sse4::Probes());
-#endif
-#if defined(CELLRAY_SIMD_AVX2)
-  if (simd::IsaSupported(simd::Isa::Avx2)) out.push_back(simd::avx2::Probes());
-#endif
-#endif
+  for (const std::string& isa : simd::SupportedVectorIsas()) out.push_back(simd::IsaProbes(simd::ParseIsa(isa)));
   if (out.empty()) MESSAGE("SKIPPED: no SIMD ISA on this CPU");
   return out;
 }

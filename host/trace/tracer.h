@@ -50,7 +50,7 @@ struct TraceConfig {
   AccelParams params;
   int threads = 0;          // 0: all cores
   bool stats = false;       // gather Havran's per-ray measures
-  std::string isa;          // simd: avx2 | sse4 | scalar, empty: best available
+  std::string isa;          // simd: avx512 | avx2 | sse4 | scalar, empty: best available
   std::string device;       // opencl: "N" or "platform:device", empty: default
   std::string variant;      // traversal variant (e.g. ray | packet; embree: single | packet8), empty: default
   // Internal hit form for the renderer: HitRecord.prim is the unified piece
