@@ -389,7 +389,8 @@ TEST_CASE("simd: the wide BVH holds every reference once, in packs the slots nam
     simd::KernelScene sc;
     simd::SimdPrimData rows(scene);
     rows.Bind(sc);
-    for (auto [n, k] : {std::pair{8, 4}, std::pair{4, 4}}) {
+    for (const auto& nk : {std::pair{8, 4}, std::pair{4, 4}}) {
+      const int n = nk.first, k = nk.second;  // not a binding: clang 14 cannot capture one
       CAPTURE(n);
       const auto wide = simd::BuildWideBVH(data.bvh, sc, n, k);
       wide->Bind(sc);
