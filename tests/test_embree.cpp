@@ -28,11 +28,20 @@ TEST_CASE("embree: robust variants give 0 wrong on SPD scenes with every primiti
     MESSAGE("SKIPPED: this build has no Embree");
     return;
   }
+  // 16-wide packets where Embree and the CPU have them (AVX-512): an input
+  // error elsewhere.
+  std::vector<const char*> robustVariants{"single-robust", "packet8-robust"};
+  try {
+    CreateTracer(test::CachedScene(test::SpdPath("tetra")), EmbreeConfig("packet16"));
+    robustVariants.push_back("packet16-robust");
+  } catch (const InputError& e) {
+    MESSAGE("packet16 not run: ", e.what());
+  }
   for (const std::string& name : test::Scenes({"tetra", "teapot", "balls", "rings", "tree"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     for (RayKind kind : {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse}) {
       const auto rays = test::MakeRays(scene, kind, 48);
-      for (const char* variant : {"single-robust", "packet8-robust"}) {
+      for (const char* variant : robustVariants) {
         INFO(name, " ", RayKindName(kind), " ", variant);
         const auto r = test::CheckTracer(scene, EmbreeConfig(variant), rays, test::IsOcclusion(kind));
         CHECK(r.wrong == 0);
@@ -81,7 +90,7 @@ TEST_CASE("embree: bad parameters are input errors")
     return;
   }
   const Scene& scene = test::CachedScene(test::SpdPath("tetra"));
-  TraceConfig c = EmbreeConfig("packet16");
+  TraceConfig c = EmbreeConfig("packet32");
   CHECK_THROWS_AS(CreateTracer(scene, c), InputError);
   c = EmbreeConfig("single");
   c.accel = AccelKind::Grid;

@@ -1,7 +1,8 @@
 // The `embree` backend: Intel's Embree 3 as the bench's baseline, tracing the
 // same .rays as our backends with the same parallelism (oneTBB parallel_for
 // over blocks of rays). Variants: `single` (rtcIntersect1 / rtcOccluded1 per
-// ray) and `packet8` (rtcIntersect8 / rtcOccluded8 on 8 consecutive rays);
+// ray), `packet8` (rtcIntersect8 / rtcOccluded8 on 8 consecutive rays) and,
+// where Embree has native 16-wide packets (AVX-512), `packet16`;
 // a `-robust` suffix builds the scene with RTC_SCENE_FLAG_ROBUST. The build
 // quality is Embree's default (medium). Geometry: embree_scene.h. Motion
 // blur: each ray's time goes to Embree (RTCRay::time), which interpolates the
@@ -29,7 +30,23 @@ namespace {
 using embree::EmbreeScene;
 using embree::OccluderContext;
 
-constexpr std::size_t kPacket = 8;
+// Embree's ray packets of width W: the structures and calls.
+template <int W>
+struct EmbreePacket;
+template <>
+struct EmbreePacket<8> {
+  using RayHit = RTCRayHit8;
+  using Ray = RTCRay8;
+  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* rh) { rtcIntersect8(valid, s, c, rh); }
+  static void Occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded8(valid, s, c, r); }
+};
+template <>
+struct EmbreePacket<16> {
+  using RayHit = RTCRayHit16;
+  using Ray = RTCRay16;
+  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* rh) { rtcIntersect16(valid, s, c, rh); }
+  static void Occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded16(valid, s, c, r); }
+};
 
 class EmbreeTracer final : public Tracer {
  public:
@@ -43,12 +60,14 @@ class EmbreeTracer final : public Tracer {
       v.resize(v.size() - suffix.size());
     }
     if (v.empty() || v == "single" || v == "ray")
-      packet_ = false;
+      packet_ = 0;
     else if (v == "packet8" || v == "packet")
-      packet_ = true;
+      packet_ = 8;
+    else if (v == "packet16")
+      packet_ = 16;
     else
-      throw InputError(fmt::format("--variant '{}': the embree backend has single and packet8 (each also with "
-                                   "-robust: RTC_SCENE_FLAG_ROBUST)",
+      throw InputError(fmt::format("--variant '{}': the embree backend has single, packet8 and packet16 (each also "
+                                   "with -robust: RTC_SCENE_FLAG_ROBUST)",
                                    cfg.variant));
     if (cfg.accel != AccelKind::BVH)
       throw InputError(fmt::format("--backend embree builds Embree's own BVH; --accel {} is not available",
@@ -61,8 +80,10 @@ class EmbreeTracer final : public Tracer {
     embree::EmbreeOptions opt;
     opt.robust = robust_;
     es_ = std::make_unique<EmbreeScene>(scene, opt);
-    if (packet_ && !rtcGetDeviceProperty(es_->Device(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
+    if (packet_ == 8 && !rtcGetDeviceProperty(es_->Device(), RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
       throw InputError("--variant packet8: this Embree or CPU has no 8-wide ray packets (AVX)");
+    if (packet_ == 16 && !rtcGetDeviceProperty(es_->Device(), RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED))
+      throw InputError("--variant packet16: this Embree or CPU has no 16-wide ray packets (AVX-512)");
     info_.buildMs = es_->BuildMs();
     info_.bytes = es_->Bytes();
     info_.params = fmt::format("embree {} build=medium flags={}", RTC_VERSION_STRING, robust_ ? "robust" : "none");
@@ -74,9 +95,14 @@ class EmbreeTracer final : public Tracer {
   {
     hits.resize(rays.size());
     if (packet_) {
-      const std::size_t nPackets = (rays.size() + kPacket - 1) / kPacket;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nPackets, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) TracePacket(rays, times, hits, p * kPacket, occlusion);
+      const std::size_t w = static_cast<std::size_t>(packet_);
+      const std::size_t nPackets = (rays.size() + w - 1) / w;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nPackets, 128 / w), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p)
+          if (packet_ == 16)
+            TracePacket<16>(rays, times, hits, p * w, occlusion);
+          else
+            TracePacket<8>(rays, times, hits, p * w, occlusion);
       });
     } else {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -88,7 +114,7 @@ class EmbreeTracer final : public Tracer {
   std::string DeviceName() const override { return "cpu (Embree " RTC_VERSION_STRING ")"; }
   std::string VariantName() const override
   {
-    return fmt::format("{}{}", packet_ ? "packet8" : "single", robust_ ? " robust" : "");
+    return fmt::format("{}{}", packet_ ? fmt::format("packet{}", packet_) : "single", robust_ ? " robust" : "");
   }
   void Describe(nlohmann::json& j) const override
   {
@@ -100,7 +126,7 @@ class EmbreeTracer final : public Tracer {
   const Scene& scene_;
   PrimRanges ranges_{};
   bool unified_ = false;
-  bool packet_ = false;
+  int packet_ = 0;  // rays per packet: 0 (single), 8 or 16
   bool robust_ = false;
   std::vector<std::uint32_t> primIds_;
   std::unique_ptr<EmbreeScene> es_;
@@ -198,12 +224,14 @@ class EmbreeTracer final : public Tracer {
     return RecordOfUnified(occluder, 0.0f, 0.0f, 0.0f, true);
   }
 
+  template <int W>
   void TracePacket(RaySpan rays, TimeSpan times, std::vector<HitRecord>& hits,
                    std::size_t first, bool occlusion) const
   {
+    constexpr std::size_t kPacket = W;
     const std::size_t n = std::min(kPacket, rays.size() - first);
-    alignas(32) int valid[kPacket];
-    alignas(32) RTCRayHit8 rh;
+    alignas(64) int valid[kPacket];
+    alignas(64) typename EmbreePacket<W>::RayHit rh;
     for (std::size_t i = 0; i < kPacket; ++i) {
       const std::size_t j = first + (i < n ? i : 0);
       const RayRecord& rec = rays[j];
@@ -228,12 +256,12 @@ class EmbreeTracer final : public Tracer {
     OccluderContext c;
     InitContext(c, occluder, kPacket);
     if (!occlusion) {
-      rtcIntersect8(valid, es_->Handle(), &c.ctx, &rh);
+      EmbreePacket<W>::Intersect(valid, es_->Handle(), &c.ctx, &rh);
       for (std::size_t i = 0; i < n; ++i)
         hits[first + i] = Record(rh.hit.geomID[i], rh.hit.primID[i], rh.ray.tfar[i], rh.hit.u[i], rh.hit.v[i], false);
       return;
     }
-    rtcOccluded8(valid, es_->Handle(), &c.ctx, &rh.ray);
+    EmbreePacket<W>::Occluded(valid, es_->Handle(), &c.ctx, &rh.ray);
     for (std::size_t i = 0; i < n; ++i) {
       if (!(rh.ray.tfar[i] < 0.0f))
         hits[first + i] = HitRecord{INFINITY, CR_NO_HIT, 0.0f, 0.0f};
