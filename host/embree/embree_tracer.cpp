@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -30,23 +31,17 @@ namespace {
 using embree::EmbreeScene;
 using embree::OccluderContext;
 
-// Embree's ray packets of width W: the structures and calls.
+// Embree's ray packets: the structure and the two calls of one width.
+template <class RayHitT, void (*kIntersect)(const int*, RTCScene, RTCIntersectContext*, RayHitT*),
+          void (*kOccluded)(const int*, RTCScene, RTCIntersectContext*, decltype(RayHitT::ray)*)>
+struct EmbreePacketOf {
+  using RayHit = RayHitT;
+  static constexpr auto Intersect = kIntersect;
+  static constexpr auto Occluded = kOccluded;
+};
 template <int W>
-struct EmbreePacket;
-template <>
-struct EmbreePacket<8> {
-  using RayHit = RTCRayHit8;
-  using Ray = RTCRay8;
-  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* rh) { rtcIntersect8(valid, s, c, rh); }
-  static void Occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded8(valid, s, c, r); }
-};
-template <>
-struct EmbreePacket<16> {
-  using RayHit = RTCRayHit16;
-  using Ray = RTCRay16;
-  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* rh) { rtcIntersect16(valid, s, c, rh); }
-  static void Occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded16(valid, s, c, r); }
-};
+using EmbreePacket = std::conditional_t<W == 16, EmbreePacketOf<RTCRayHit16, rtcIntersect16, rtcOccluded16>,
+                                        EmbreePacketOf<RTCRayHit8, rtcIntersect8, rtcOccluded8>>;
 
 class EmbreeTracer final : public Tracer {
  public:
