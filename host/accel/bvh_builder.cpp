@@ -201,6 +201,8 @@ struct Builder {
   // A leaf's intersection cost: its primitives in blocks of sahBlock (the
   // SIMD packs test a block at once; Embree's sahBlockSize).
   float Blocks(std::uint32_t c) const { return float((c + sahBlock - 1u) / sahBlock); }
+  // Bins for a node of n references: Embree's 4 + n / 20, at most kBins.
+  static int BinsFor(std::uint32_t n) { return n >= 20u * (kBins - 4) ? kBins : 4 + static_cast<int>(n / 20u); }
 
   // The SAH sweep over m bins in order: boxOf(j) the bin's box, leftN(j)
   // the references it adds to the left side, rightN(j) those it adds to the
@@ -236,6 +238,7 @@ struct Builder {
     float cost = INFINITY;
     int axis = -1, split = -1;
     float scale = 0.0f;
+    int bins = kBins;
     Box left, right;
   };
   ObjectSplit FindObjectSplit(const PrimRef* span, std::uint32_t n, const Bounds2& nb) const
@@ -245,7 +248,8 @@ struct Builder {
     const F4 ext = cb.hi - cb.lo;
     // Binned SAH over all three axes, binned in one pass.
     float scale[3];
-    for (int a = 0; a < 3; ++a) scale[a] = ext[a] > 0.0f ? float(kBins) / ext[a] : 0.0f;
+    const int nBins = BinsFor(n);
+    for (int a = 0; a < 3; ++a) scale[a] = ext[a] > 0.0f ? float(nBins) / ext[a] : 0.0f;
     const F4 sc = {scale[0], scale[1], scale[2], 0.0f};
     Bins bins;
     Reduce(bins, begin, end, [&](Bins& acc, std::uint32_t b, std::uint32_t e) {
@@ -255,7 +259,7 @@ struct Builder {
         const F4 f = (0.5f * (lo + r.hi) - cb.lo) * sc;
         for (int a = 0; a < 3; ++a) {
           if (ext[a] <= 0.0f) continue;
-          const int k = std::min(kBins - 1, static_cast<int>(f[a]));
+          const int k = std::min(nBins - 1, static_cast<int>(f[a]));
           acc.Add(a, k, lo, r.hi);
         }
       }
@@ -283,6 +287,7 @@ struct Builder {
     }
     if (best.axis >= 0) {
       best.scale = scale[best.axis];
+      best.bins = nBins;
       for (std::uint32_t rest = bins.used[best.axis]; rest; rest &= rest - 1u) {
         const int b = __builtin_ctz(rest);
         (b <= best.split ? best.left : best.right).Extend(bins.BoxOf(best.axis, b));
@@ -301,7 +306,7 @@ struct Builder {
                                        Bounds2* sides = nullptr, bool* known = nullptr)
   {
     const auto isLeft = [&](const PrimRef& r) {
-      const int b = std::min(kBins - 1, static_cast<int>((r.Centroid()[os.axis] - cb.lo[os.axis]) * os.scale));
+      const int b = std::min(os.bins - 1, static_cast<int>((r.Centroid()[os.axis] - cb.lo[os.axis]) * os.scale));
       return b <= os.split;
     };
     Bounds2 lb, rb;
@@ -577,6 +582,12 @@ struct Builder {
     } else if (depth >= kSahDepth) {
       mid = begin + n / 2;
       std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end, byCentroid(axis));
+    } else if (n <= static_cast<std::uint32_t>(maxLeaf) && n <= sahBlock &&
+               step.box.Area() <= std::numeric_limits<float>::max()) {
+      // One block: the leaf costs 1 and any split 1 + a cost >= 0 (finite
+      // areas), so the SAH below would take the leaf (the same tree; with
+      // sah_block 4 every leaf skips its binning).
+      return leaf();
     } else {
       const ObjectSplit os = FindObjectSplit(refs.data() + begin, n, nb);
       const float parentArea = step.box.Area();
@@ -743,7 +754,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     empty.first = 0;
     out.nodes.push_back(empty);
     out.header.nNodes = 1;
-    info.params = fmt::format("leaf={} bins={}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
+    info.params = fmt::format("leaf={} bins=4..{}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
     info.nodes = 1;
     info.bytes = sizeof(BVHNode);
     return out;
@@ -779,7 +790,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   info.refs = out.refs.size();
   info.emptyLeaves = 0;
   info.bytes = out.nodes.size() * sizeof(BVHNode) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("leaf={} bins={}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
+  info.params = fmt::format("leaf={} bins=4..{}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
   if (spatial)
     info.params += fmt::format(" quality=high spatial_bins={} split_refs={}", kSpatialBins, bld.splitRefs.load());
   return out;
