@@ -21,7 +21,8 @@ namespace cr {
 
 namespace {
 
-constexpr int kBins = 32;
+constexpr int kBins = 32;     // bins of a large node (BinsFor)
+constexpr int kMinBins = 4;   // and of the smallest
 constexpr int kDefaultLeaf = 4;
 // Below this depth SAH decides; deeper, object-median splits bound the depth
 // (<= 32 + log2(n)) so the traversal stack (CR_BVH_STACK = 64) never overflows.
@@ -202,7 +203,10 @@ struct Builder {
   // SIMD packs test a block at once; Embree's sahBlockSize).
   float Blocks(std::uint32_t c) const { return float((c + sahBlock - 1u) / sahBlock); }
   // Bins for a node of n references: Embree's 4 + n / 20, at most kBins.
-  static int BinsFor(std::uint32_t n) { return n >= 20u * (kBins - 4) ? kBins : 4 + static_cast<int>(n / 20u); }
+  static int BinsFor(std::uint32_t n)
+  {
+    return n >= 20u * (kBins - kMinBins) ? kBins : kMinBins + static_cast<int>(n / 20u);
+  }
 
   // The SAH sweep over m bins in order: boxOf(j) the bin's box, leftN(j)
   // the references it adds to the left side, rightN(j) those it adds to the
@@ -718,7 +722,12 @@ void CopyFlat(const std::vector<FlatCopy>& copies, BigVector<BVHNode>& nodes, Ac
 
 }  // namespace
 
-static std::string BlockParam(std::uint32_t block) { return block > 1 ? fmt::format(" sah_block={}", block) : ""; }
+// The build's parameters as `structure.params` reports them.
+static std::string BuildParams(int maxLeaf, std::uint32_t block)
+{
+  return fmt::format("leaf={} bins={}..{}{}", maxLeaf, kMinBins, kBins,
+                     block > 1 ? fmt::format(" sah_block={}", block) : "");
+}
 
 BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
 {
@@ -754,7 +763,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
     empty.first = 0;
     out.nodes.push_back(empty);
     out.header.nNodes = 1;
-    info.params = fmt::format("leaf={} bins=4..{}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
+    info.params = BuildParams(bld.maxLeaf, bld.sahBlock);
     info.nodes = 1;
     info.bytes = sizeof(BVHNode);
     return out;
@@ -790,7 +799,7 @@ BVHData BuildBVH(const Scene& scene, const AccelParams& params, AccelInfo& info)
   info.refs = out.refs.size();
   info.emptyLeaves = 0;
   info.bytes = out.nodes.size() * sizeof(BVHNode) + out.refs.size() * sizeof(std::uint32_t);
-  info.params = fmt::format("leaf={} bins=4..{}{}", bld.maxLeaf, kBins, BlockParam(bld.sahBlock));
+  info.params = BuildParams(bld.maxLeaf, bld.sahBlock);
   if (spatial)
     info.params += fmt::format(" quality=high spatial_bins={} split_refs={}", kSpatialBins, bld.splitRefs.load());
   return out;
