@@ -90,6 +90,10 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* 
   }
 }
 
+#elif defined(CR_BVH_WIDE)
+/* The wide walk of CPU devices (OpenCL only; --variant wide). */
+#include "bvh_wide.cl"
+
 #else /* the stack walk */
 
 /* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray against the

@@ -491,6 +491,7 @@ AccelParams SimdTracerParams(const Scene& scene, const TraceConfig& config)
 {
   return WhyDelegated(config, ParseIsa(config.isa)).empty() ? SimdParams(scene, config) : config.params;
 }
+AccelParams WideLayoutParams(const Scene& scene, const TraceConfig& config) { return SimdParams(scene, config); }
 }  // namespace simd
 
 std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config)

@@ -335,6 +335,10 @@ void Sweep(Precision precision, const char* variant, bool coldInline = false, co
         // The stackless walk is the BVH's; its reads (parent links after the
         // references) do not depend on the types: the every-type set.
         if (std::string(variant) == "stackless" && (accel != AccelKind::BVH || &ts != &kEveryType)) continue;
+        // The wide walk is the BVH's too: its triangle packs (t, stc) and the
+        // other types' ids and mixed leaves (stc, bqhfg).
+        if (std::string(variant) == "wide" && (accel != AccelKind::BVH || &ts == &kTypeSets[0] || &ts == &kTypeSets[2]))
+          continue;
         const std::string what = fmt::format("{} {} {}:4x4 {} {}", ts.name, AccelKindName(accel), variant,
                                              occlusion ? "occlusion" : "closest", PrecisionName(precision));
         const std::string tag = fmt::format("{}-{}-{}-{}-{}{}{}", ts.name, AccelKindName(accel), variant,
@@ -383,6 +387,18 @@ TEST_CASE("oclgrind: per-ray kernels, fp64, types stc bqhfg x structure, closest
 TEST_CASE("oclgrind: stackless BVH walk, robust, every type x query" * doctest::skip(NoOclgrind()))
 {
   Sweep(Precision::Robust, "stackless");
+}
+
+// The wide BVH walk reads the 8-wide layout (nodes, packs, leaves) with
+// vector loads.
+TEST_CASE("oclgrind: wide BVH walk, robust, types t stc bqhfg x query" * doctest::skip(NoOclgrind()))
+{
+  Sweep(Precision::Robust, "wide");
+}
+
+TEST_CASE("oclgrind: wide BVH walk, fast, types stc bqhfg, closest hits" * doctest::skip(NoOclgrind()))
+{
+  Sweep(Precision::Fast, "wide");
 }
 
 TEST_CASE("oclgrind: packet kernels, fast, types stc bqhfg x structure, closest hits" * doctest::skip(NoOclgrind()))

@@ -120,23 +120,27 @@ const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, R
 constexpr int kRaySize = 24;  // 576 rays per scene and kind
 
 // Every SPD scene x ray kind with `accel`, for the ray and packet variants
-// (and the BVH's stackless walk).
+// (and the BVH's stackless and wide walks; the wide walk's binary BVH is
+// built with the SIMD backend's parameters, BackendAccelParams, and so is
+// the scalar side it is compared with).
 void RunConformance(AccelKind accel)
 {
   auto cache = TestCacheDir();
   std::size_t ties = 0, otherOccluders = 0;
   std::vector<std::string> variants = {"ray", "packet"};
-  if (accel == AccelKind::BVH) variants.push_back("stackless");
+  if (accel == AccelKind::BVH) variants.insert(variants.end(), {"stackless", "wide"});
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     TraceConfig sc;
     sc.backend = Backend::Scalar;
     sc.accel = accel;
-    auto scalar = CreateTracer(scene, sc);
     for (const std::string& variant : variants) {
       TraceConfig cfg = sc;
       cfg.backend = Backend::OpenCL;
       cfg.variant = variant;
+      TraceConfig scalarCfg = sc;
+      scalarCfg.params = BackendAccelParams(scene, cfg);
+      auto scalar = CreateTracer(scene, scalarCfg);
       auto tracer = CreateTracer(scene, cfg);
       for (RayKind kind : kKinds) {
         const bool occlusion = test::IsOcclusion(kind);
@@ -325,7 +329,7 @@ TEST_CASE("opencl: device choice" * doctest::skip(NoOpenCL()))
   CHECK_NOTHROW(ClCheckAllocation(all[0], "test buffer", 1024));
 }
 
-TEST_CASE("opencl: conformance, bvh, ray, packet and stackless variants, every SPD scene x ray kind" *
+TEST_CASE("opencl: conformance, bvh, ray, packet, stackless and wide variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
   RunConformance(AccelKind::BVH);
@@ -422,11 +426,12 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
     TraceStatsSum scalarStats;
     std::vector<HitRecord> ref;
     CreateTracer(scene, sc)->Trace(rays, ref, false, &scalarStats);
-    for (const char* variant : {"ray", "packet", "stackless"}) {
+    for (const char* variant : {"ray", "packet", "stackless", "wide"}) {
       TraceConfig cfg = sc;
       cfg.backend = Backend::OpenCL;
       cfg.variant = variant;
-      if (std::string(variant) == "stackless" && accel != AccelKind::BVH) {
+      const std::string v = variant;
+      if ((v == "stackless" || v == "wide") && accel != AccelKind::BVH) {
         CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);  // the BVH's walk only
         continue;
       }

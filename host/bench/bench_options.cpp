@@ -50,12 +50,13 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
   };
   const std::vector<AccelKind> allAccels(std::begin(kAccelKinds), std::end(kAccelKinds));
   if (defaults) {
-    // Speed: every structure on the CPU default and on OpenCL, the packet
-    // and stackless variants, Embree.
+    // Speed: every structure on the CPU default and on OpenCL, the packet,
+    // stackless and wide variants, Embree.
     for (AccelKind a : allAccels) add(Backend::Simd, a, Precision::Robust);
     for (AccelKind a : allAccels) add(Backend::OpenCL, a, Precision::Robust);
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "packet");
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "stackless");
+    add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "wide");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "packet8");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single-robust");
@@ -92,6 +93,7 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
         if (b == Backend::OpenCL && a == AccelKind::BVH) {
           add(b, a, p, "packet");
           add(b, a, p, "stackless");
+          add(b, a, p, "wide");
         }
       }
   }

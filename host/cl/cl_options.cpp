@@ -9,15 +9,15 @@
 
 namespace cr {
 
-void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW, int* tileH, bool* stackless)
+void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW, int* tileH, ClBvhWalk* walk)
 {
   std::string v = s;
   generic = false;
-  if (stackless) *stackless = false;
+  if (walk) *walk = ClBvhWalk::Stack;
   if (tileW) *tileW = 0;
   if (tileH) *tileH = 0;
   const auto bad = [&] {
-    return InputError(fmt::format("--variant '{}': the opencl backend has ray, stackless (bvh) and packet, each also "
+    return InputError(fmt::format("--variant '{}': the opencl backend has ray, stackless and wide (bvh), and packet, each also "
                                   "as ray-generic, ..., optionally with a work-group tile :WxH (e.g. packet:8x8)",
                                   s));
   };
@@ -36,9 +36,9 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int
     generic = true;
     v.resize(v.size() - suffix.size());
   }
-  if (v.empty() || v == "ray" || v == "stackless") {
+  if (v.empty() || v == "ray" || v == "stackless" || v == "wide") {
     variant = ClVariant::Ray;
-    if (stackless) *stackless = v == "stackless";
+    if (walk) *walk = v == "stackless" ? ClBvhWalk::Stackless : v == "wide" ? ClBvhWalk::Wide : ClBvhWalk::Stack;
     return;
   }
   if (v == "packet") {
@@ -50,15 +50,34 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int
 
 const char* ClVariantName(ClVariant v) { return v == ClVariant::Packet ? "packet" : "ray"; }
 
+const char* ClBvhWalkName(ClBvhWalk w, ClVariant v)
+{
+  return w == ClBvhWalk::Stackless ? "stackless" : w == ClBvhWalk::Wide ? "wide" : ClVariantName(v);
+}
+
+bool ClWalksWideBVH(const TraceConfig& config)
+{
+  if (config.accel != AccelKind::BVH) return false;
+  ClVariant v = ClVariant::Ray;
+  bool generic = false;
+  ClBvhWalk walk = ClBvhWalk::Stack;
+  try {
+    ParseClVariant(config.variant, v, generic, nullptr, nullptr, &walk);
+  } catch (const InputError&) {
+    return false;
+  }
+  return walk == ClBvhWalk::Wide;
+}
+
 ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
                                 const ClDevice& dev)
 {
   ClProgramSpec s;
   int tileW = 0, tileH = 0;
-  ParseClVariant(config.variant, s.variant, s.generic, &tileW, &tileH, &s.stackless);
-  if (s.stackless && config.accel != AccelKind::BVH)
-    throw InputError(fmt::format("--variant {}: the stackless walk is the BVH's (--accel bvh), not the {}'s",
-                                 config.variant, AccelKindName(config.accel)));
+  ParseClVariant(config.variant, s.variant, s.generic, &tileW, &tileH, &s.bvhWalk);
+  if (s.bvhWalk != ClBvhWalk::Stack && config.accel != AccelKind::BVH)
+    throw InputError(fmt::format("--variant {}: the {} walk is the BVH's (--accel bvh), not the {}'s", config.variant,
+                                 ClBvhWalkName(s.bvhWalk, s.variant), AccelKindName(config.accel)));
   if (config.precision == Precision::Fp64 && !dev.fp64)
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
@@ -155,7 +174,8 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.cameraFp64) o += " -DCR_CAMERA_FP64";
   if (s.stats) o += " -DCR_STATS";
   if (s.coldInline) o += " -DCR_COLD_INLINE";
-  if (s.stackless) o += " -DCR_BVH_STACKLESS";
+  if (s.bvhWalk == ClBvhWalk::Stackless) o += " -DCR_BVH_STACKLESS";
+  if (s.bvhWalk == ClBvhWalk::Wide) o += " -DCR_BVH_WIDE";
   if (s.octreeMailbox) o += " -DCR_OCTREE_MAILBOX_BUILD=1";
   if (s.octreeRayMargin) {
     o += " -DCR_OCTREE_MARGIN_BUILD=1";

@@ -15,6 +15,11 @@
 namespace cr {
 
 enum class ClVariant { Ray, Packet };
+// How the per-ray kernel walks the BVH (kernels/bvh.h): with a stack (the
+// default), without one (CR_BVH_STACKLESS; --variant stackless), or through
+// the SIMD backend's 8-wide layout with float8 (CR_BVH_WIDE; --variant wide,
+// for CPU devices: kernels/bvh_wide.cl).
+enum class ClBvhWalk { Stack, Stackless, Wide };
 
 struct ClProgramSpec {
   bool generic = false;          // all primitive types and structures, query by argument
@@ -26,7 +31,7 @@ struct ClProgramSpec {
   Precision precision = Precision::Robust;
   bool stats = false;
   ClVariant variant = ClVariant::Ray;
-  bool stackless = false;        // the BVH walked without a stack (CR_BVH_STACKLESS; --variant stackless)
+  ClBvhWalk bvhWalk = ClBvhWalk::Stack;  // the per-ray kernel's BVH walk (--variant stackless, wide)
   bool octreeMailbox = false;    // the octree walks with its mailbox (CR_OCTREE_MAILBOX_BUILD; --octree-mailbox on)
   bool octreeRayMargin = false;  // the octree walks with the ray's margins (CR_OCTREE_MARGIN_BUILD; --octree-margin ray)
   bool camera = false;           // primary rays generated on the device, else rays from a buffer
@@ -51,11 +56,18 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
 std::string ClBuildOptions(const ClProgramSpec& spec, const ClDevice& dev);
 
 // Parses --variant: "", "ray", "stackless" (the ray kernel with the BVH
-// walked without a stack), "packet", optionally suffixed "-generic", then
+// walked without a stack), "wide" (the ray kernel with the BVH's 8-wide
+// layout), "packet", optionally suffixed "-generic", then
 // optionally ":WxH", the work-group tile (packet size; tileW, tileH 0 when
 // absent: the device's default, see MakeClProgramSpec).
 void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW = nullptr,
-                    int* tileH = nullptr, bool* stackless = nullptr);
+                    int* tileH = nullptr, ClBvhWalk* walk = nullptr);
 const char* ClVariantName(ClVariant v);
+// "stackless", "wide"; the stack walk: ClVariantName's.
+const char* ClBvhWalkName(ClBvhWalk w, ClVariant v);
+// Whether the OpenCL backend walks the BVH's 8-wide layout for `config`
+// (--accel bvh --variant wide): it then builds with the SIMD backend's
+// parameters (BackendAccelParams).
+bool ClWalksWideBVH(const TraceConfig& config);
 
 }  // namespace cr

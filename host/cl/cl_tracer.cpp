@@ -16,6 +16,7 @@
 #include "host/core/error.h"
 #include "host/prims/prim_host.h"
 #include "host/trace/tracer.h"
+#include "simd/bvh_wide_builder.h"
 
 namespace cr {
 
@@ -86,11 +87,12 @@ class ClTracer final : public Tracer {
     const ClProgramSpec spec = MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
     tileW_ = spec.packetW;
     tileH_ = spec.packetH;
-    AccelData data = BuildAccel(scene, cfg.accel, cfg.params);
-    stackless_ = spec.stackless;
-    if (stackless_) AddBVHParents(data.bvh, data.info);
+    walk_ = spec.bvhWalk;
+    AccelData data = BuildAccel(scene, cfg.accel, BackendAccelParams(scene, cfg));
+    if (walk_ == ClBvhWalk::Stackless) AddBVHParents(data.bvh, data.info);
     info_ = data.info;
     Upload(data);
+    if (walk_ == ClBvhWalk::Wide) UploadWide(data);
   }
 
   void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
@@ -154,7 +156,7 @@ class ClTracer final : public Tracer {
   std::string VariantName() const override
   {
     return fmt::format("{} {}{} {}x{}", PrecisionName(config_.precision),
-                       stackless_ ? "stackless" : ClVariantName(variant_),
+                       ClBvhWalkName(walk_, variant_),
                        generic_ ? " generic" : "", tileW_, tileH_);
   }
 
@@ -406,6 +408,52 @@ class ClTracer final : public Tracer {
     }
   }
 
+  // The wide walk (kernels/bvh_wide.cl): the binary BVH collapsed into the
+  // SIMD backend's 8-wide layout with triangle packs of 8 (simd/bvh_wide.h),
+  // uploaded as the BVH's nodes and references in place of the binary ones.
+  // References: the start of each type's packs and of the mixed leaves, then
+  // the triangle packs as they are (88 words), each other type's packs as
+  // their 8 unified ids, each mixed leaf as (first pack, packs) per type.
+  void UploadWide(const AccelData& data)
+  {
+    static_assert(sizeof(simd::TrianglePack<8>) == 88 * sizeof(std::uint32_t));
+    static_assert(sizeof(simd::WideNode<8>) == 64 * sizeof(std::uint32_t));
+    const auto t0 = std::chrono::steady_clock::now();
+    simd::SimdPrimData rows(scene_);
+    simd::KernelScene sc;
+    rows.Bind(sc);
+    const std::unique_ptr<simd::WideBVHBase> base = simd::BuildWideBVH(data.bvh, sc, 8, 8);
+    const auto& w = dynamic_cast<const simd::WideBVH<8, 8>&>(*base);
+    std::vector<std::uint32_t> refs(CR_NUM_PRIM_TYPES + 1, 0u);
+    const auto place = [&](std::uint32_t k, const auto& packs) {
+      refs[k] = static_cast<std::uint32_t>(refs.size());
+      if (k == CR_PRIM_TRIANGLE) {
+        const auto* words = reinterpret_cast<const std::uint32_t*>(packs.data());
+        refs.insert(refs.end(), words, words + packs.size() * 88);
+      } else {
+        for (const auto& p : packs) refs.insert(refs.end(), std::begin(p.g), std::end(p.g));
+      }
+    };
+#define CR_CL_WIDE_PLACE_(T, U, a) place(CR_PRIM_##U, w.a);
+    CR_PRIM_TYPES(CR_CL_WIDE_PLACE_)
+#undef CR_CL_WIDE_PLACE_
+    refs[CR_NUM_PRIM_TYPES] = static_cast<std::uint32_t>(refs.size());
+    for (const simd::WideLeaf& leaf : w.leaves)
+      for (std::uint32_t k = 0; k < CR_NUM_PRIM_TYPES; ++k) {
+        refs.push_back(leaf.first[k]);
+        refs.push_back(leaf.count[k]);
+      }
+    if (refs.size() > 0xFFFFFFFFu) throw RuntimeError("OpenCL: the wide BVH's references exceed 2^32 words");
+    const std::size_t s = CR_ACCEL_ID_BVH;
+    accel_[3 * s + 1] = ClUpload(cl_, "bvh wide nodes", w.nodes.data(), w.nodes.size() * sizeof(w.nodes[0]));
+    accel_[3 * s + 2] = ClUpload(cl_, "bvh wide references", refs.data(), refs.size() * sizeof(std::uint32_t));
+    const std::uint64_t bytes = w.nodes.size() * sizeof(w.nodes[0]) + refs.size() * sizeof(std::uint32_t);
+    info_.bytes = info_.bytes - data.bvh.nodes.size() * sizeof(BVHNode) -
+                  data.bvh.refs.size() * sizeof(std::uint32_t) + bytes;
+    info_.params += fmt::format(" opencl=bvh8x8 wide_nodes={} wide_bytes={}", w.nodes.size(), bytes);
+    info_.buildMs += MsSince(t0);
+  }
+
   // Ray, hit and counter buffers for n rays (grown, never shrunk).
   void EnsureTimeBuffer(std::size_t n)
   {
@@ -453,7 +501,9 @@ class ClTracer final : public Tracer {
   TraceConfig config_;
   ClContext cl_;
   ClVariant variant_ = ClVariant::Ray;
-  bool stackless_ = false;  // the BVH walked without a stack (its parent links uploaded with the references)
+  // The BVH's walk: stackless (its parent links uploaded with the
+  // references) or wide (its 8-wide layout uploaded instead, UploadWide).
+  ClBvhWalk walk_ = ClBvhWalk::Stack;
   bool generic_ = false;
   int tileW_ = 0, tileH_ = 0;  // work-group tile (packet size)
   std::unique_ptr<Built> built_[3];  // rays closest, rays occlusion, camera (a generic program: slot 0)

@@ -1,5 +1,7 @@
 #include "host/trace/tracer.h"
 
+#include "host/cl/cl_options.h"
+
 #include <chrono>
 
 #include <fmt/format.h>
@@ -10,6 +12,7 @@
 #include <cstdlib>
 
 #include "host/cl/cl_device.h"
+#include "host/cl/cl_options.h"
 #include "host/core/error.h"
 #include "host/reference/reference.h"
 #include "host/trace/direction_scale.h"
@@ -170,6 +173,7 @@ std::unique_ptr<Tracer> CreateScalarTracer(const Scene& scene, const TraceConfig
 std::unique_ptr<Tracer> CreateSimdTracer(const Scene& scene, const TraceConfig& config);
 namespace simd {
 AccelParams SimdTracerParams(const Scene& scene, const TraceConfig& config);
+AccelParams WideLayoutParams(const Scene& scene, const TraceConfig& config);
 }
 std::unique_ptr<Tracer> CreateOpenCLTracer(const Scene& scene, const TraceConfig& config);
 #ifdef CELLRAY_HAVE_EMBREE
@@ -294,7 +298,10 @@ std::unique_ptr<Tracer> CreateTracer(const Scene& scene, const TraceConfig& conf
 
 AccelParams BackendAccelParams(const Scene& scene, const TraceConfig& config)
 {
-  return config.backend == Backend::Simd ? simd::SimdTracerParams(scene, config) : config.params;
+  if (config.backend == Backend::Simd) return simd::SimdTracerParams(scene, config);
+  // The OpenCL backend's wide walk builds the SIMD backend's layout.
+  if (config.backend == Backend::OpenCL && ClWalksWideBVH(config)) return simd::WideLayoutParams(scene, config);
+  return config.params;
 }
 
 }  // namespace cr

@@ -1,0 +1,253 @@
+/* The BVH's wide walk for CPU devices (--variant wide, CR_BVH_WIDE; OpenCL
+ * only): one work-item per ray through the SIMD backend's 8-wide layout
+ * (simd/bvh_wide.h: nodes whose 8 child boxes lie structure-of-arrays,
+ * leaves of triangle packs of 8), with OpenCL's float8 where the SIMD backend
+ * has its vfloat<8> (Wald, Benthin & Boulos 2008; Dammertz et al. 2008). A CPU
+ * device such as PoCL does not vectorise the per-ray kernels across
+ * work-items (their loops differ per ray), so the per-ray walk's scalar code
+ * runs one lane wide; here the child boxes and a pack's edge functions run 8
+ * wide in each work-item.
+ *
+ * Same answers as BVH_Trace: each child's slab test is Box_Slabs lane by lane
+ * (the same float operations, no contraction: prelude.h), and a triangle pack
+ * only filters: the lanes whose edge functions (Triangle_Intersect's, the
+ * same operations) leave the ray's line outside the triangle are dropped,
+ * every other lane (and every lane of a triangle with long edges, whose edges
+ * Triangle_Intersect may refine) takes Prim_Intersect itself, as do the
+ * other types' pieces; hits are kept in Hit_Closer's order, so the closest
+ * hit does not depend on the visiting order. fp64 and moving scenes walk
+ * the same layout with the children tested one at a time (double) and no
+ * filter (a moving piece meets a shifted ray).
+ *
+ * Layout, uploaded by host/cl/cl_tracer.cpp (WideUpload): `nodes` are
+ * WideNode<8> (64 words: lower[3][8], upper[3][8], child[8], meta[8]);
+ * `refs` starts with CR_NUM_PRIM_TYPES + 1 words: where each type's packs
+ * start (triangles: TrianglePack<8> of simd/triangle.h, 88 words; every
+ * other type: the 8 unified ids of each pack), then where the mixed leaves
+ * start (2 words per type each: first pack, packs). A child slot is a node
+ * index or CR_WIDE_LEAF | p with its meta word (simd/bvh_wide.h). */
+#ifndef CELLRAY_KERNELS_BVH_WIDE_CL
+#define CELLRAY_KERNELS_BVH_WIDE_CL
+
+#define CR_WIDE_LEAF 0x80000000u
+#define CR_WIDE_MIXED 0xffff0000u
+#define CR_WIDE_NODE_WORDS 64
+#define CR_WIDE_TRI_WORDS 88
+/* Each wide level pushes at most 7 entries (simd/bvh_single.h). */
+#define CR_WIDE_STACK (7 * CR_BVH_STACK + 1)
+
+#if !defined(CR_FP64) && !CR_HAS_MOTION
+#define CR_WIDE_VECTOR 1
+#else
+#define CR_WIDE_VECTOR 0
+#endif
+
+/* The lanes of a float8 comparison as bits. */
+CR_FUNC uint Wide_Bits(int8 m)
+{
+  const int8 w = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+  return (uint)(w.s0 | w.s1 | w.s2 | w.s3 | w.s4 | w.s5 | w.s6 | w.s7);
+}
+CR_FUNC int Wide_Lowest(uint bits) { return 31 - (int)clz(bits & (0u - bits)); }
+
+#ifdef CR_STATS
+#define CR_WIDE_COUNT_TESTS(st, n) ((st)->nIT += (n))
+#else
+#define CR_WIDE_COUNT_TESTS(st, n) ((void)0)
+#endif
+
+/* A triangle pack: the lanes that may hit take Prim_Intersect. Returns 1 to
+ * stop (an occlusion query has its occluder). */
+CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
+                              TraceStats* st)
+{
+  CR_GLOBAL const uint* g = pk + 72;
+  const uint8 gg = vload8(0, g);
+  uint bits = Wide_Bits(gg != (uint8)(CR_NO_HIT));
+  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+#if CR_WIDE_VECTOR
+  CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* v[vertex][axis][lane] */
+#ifdef CR_FAST
+  /* Triangle_Intersect's Moller-Trumbore up to its u and v tests. */
+  float8 e1[3], e2[3], tv[3], pv3[3], qv[3];
+  CR_UNROLL for (int i = 0; i < 3; ++i) {
+    const float8 v0 = vload8(0, v + i * 8);
+    e1[i] = vload8(0, v + (3 + i) * 8) - v0;
+    e2[i] = vload8(0, v + (6 + i) * 8) - v0;
+    tv[i] = (float8)(ray->org[i]) - v0;
+  }
+  const float8 d0 = (float8)(ray->dir[0]), d1 = (float8)(ray->dir[1]), d2 = (float8)(ray->dir[2]);
+  pv3[0] = d1 * e2[2] - d2 * e2[1];
+  pv3[1] = d2 * e2[0] - d0 * e2[2];
+  pv3[2] = d0 * e2[1] - d1 * e2[0];
+  const float8 det = e1[0] * pv3[0] + e1[1] * pv3[1] + e1[2] * pv3[2];
+  const float8 invDet = (float8)(1.0f) / det;
+  const float8 u = (tv[0] * pv3[0] + tv[1] * pv3[1] + tv[2] * pv3[2]) * invDet;
+  qv[0] = tv[1] * e1[2] - tv[2] * e1[1];
+  qv[1] = tv[2] * e1[0] - tv[0] * e1[2];
+  qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
+  const float8 vv = (d0 * qv[0] + d1 * qv[1] + d2 * qv[2]) * invDet;
+  const int8 miss = (fabs(det) < (float8)(1e-9f)) | (u < (float8)(0.0f)) | (u > (float8)(1.0f)) |
+                    (vv < (float8)(0.0f)) | (u + vv > (float8)(1.0f));
+  bits &= ~Wide_Bits(miss);
+#else
+  /* Triangle_Intersect's watertight edge functions. */
+  const int kx = ray->kx, ky = ray->ky, kz = ray->kz;
+  const float8 ox = (float8)(ray->org[kx]), oy = (float8)(ray->org[ky]), oz = (float8)(ray->org[kz]);
+  const float8 sx = (float8)(ray->sx), sy = (float8)(ray->sy);
+  const float8 Az = vload8(0, v + kz * 8) - oz, Bz = vload8(0, v + (3 + kz) * 8) - oz,
+               Cz = vload8(0, v + (6 + kz) * 8) - oz;
+  const float8 Ax = (vload8(0, v + kx * 8) - ox) - sx * Az, Ay = (vload8(0, v + ky * 8) - oy) - sy * Az;
+  const float8 Bx = (vload8(0, v + (3 + kx) * 8) - ox) - sx * Bz, By = (vload8(0, v + (3 + ky) * 8) - oy) - sy * Bz;
+  const float8 Cx = (vload8(0, v + (6 + kx) * 8) - ox) - sx * Cz, Cy = (vload8(0, v + (6 + ky) * 8) - oy) - sy * Cz;
+  const float8 U = Cx * By - Cy * Bx, V = Ax * Cy - Ay * Cx, W = Bx * Ay - By * Ax;
+  const float8 zero = (float8)(0.0f);
+  const int8 miss = (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero))) |
+                    ((U + V + W) == zero);
+  /* Triangles with long edges: Triangle_Intersect may refine their edges. */
+  const uint8 flags = vload8(0, pk + 80);
+  bits &= ~Wide_Bits(miss) | Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != (uint8)(0u));
+#endif
+#endif
+  for (; bits; bits &= bits - 1u)
+    if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
+  return 0;
+}
+
+/* `count` packs of type k from `first`. Returns 1 to stop. */
+CR_FUNC int Wide_Packs(const PrimView* pv, CR_GLOBAL const uint* refs, uint k, uint first, uint count, const Ray* ray,
+                       Hit* hit, int anyHit, TraceStats* st)
+{
+  CR_GLOBAL const uint* base = refs + refs[k];
+  if (k == CR_PRIM_TRIANGLE) {
+    for (uint p = first; p < first + count; ++p)
+      if (Wide_TrianglePack(pv, base + (size_t)p * CR_WIDE_TRI_WORDS, ray, hit, anyHit, st)) return 1;
+    return 0;
+  }
+  for (uint i = first * 8u; i < (first + count) * 8u; ++i) {
+    const uint g = base[i];
+    if (g == CR_NO_HIT) continue;
+    CR_COUNT(st, nIT);
+    if (Prim_Intersect(pv, g, ray, hit) && anyHit) return 1;
+  }
+  return 0;
+}
+
+/* A leaf slot: p without the leaf flag, meta its meta word. Returns 1 to stop. */
+CR_FUNC int Wide_Leaf(const PrimView* pv, CR_GLOBAL const uint* refs, uint p, uint meta, const Ray* ray, Hit* hit,
+                      int anyHit, TraceStats* st)
+{
+  if (meta != CR_WIDE_MIXED)
+    return Wide_Packs(pv, refs, (meta >> 16) - 1u, p, meta & 0xffffu, ray, hit, anyHit, st);
+  CR_GLOBAL const uint* leaf = refs + refs[CR_NUM_PRIM_TYPES] + (size_t)p * (2u * CR_NUM_PRIM_TYPES);
+  for (uint k = 0; k < CR_NUM_PRIM_TYPES; ++k)
+    if (leaf[2u * k + 1u] && Wide_Packs(pv, refs, k, leaf[2u * k], leaf[2u * k + 1u], ray, hit, anyHit, st)) return 1;
+  return 0;
+}
+
+/* The child slots of a wide node whose boxes the ray enters in [tmin, tmax],
+ * as bits, and their entry distances in te. */
+CR_FUNC uint Wide_Children(CR_GLOBAL const float* nb, const Ray* ray, real tmin, real tmax, real te[8])
+{
+#if !defined(CR_FP64)
+  float8 boxNear = (float8)(-CR_INF), boxFar = (float8)(CR_INF);
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const float8 o = (float8)(ray->org[a]), inv = (float8)(ray->inv[a]);
+    const float8 lo = (vload8(0, nb + a * 8) - o) * inv;
+    const float8 hi = (vload8(0, nb + 24 + a * 8) - o) * inv;
+    const int neg = ray->inv[a] < 0.0f;
+    boxNear = fmax(boxNear, neg ? hi : lo);
+    boxFar = fmin(boxFar, neg ? lo : hi);
+  }
+#ifndef CR_FAST
+  boxFar = boxFar * 1.0000004f;
+#endif
+  const float8 tn = fmax((float8)(tmin), boxNear), tf = fmin((float8)(tmax), boxFar);
+  vstore8(tn, 0, te);
+  return Wide_Bits(tn <= tf);
+#else
+  uint bits = 0u;
+  for (int i = 0; i < 8; ++i) {
+    real lo[3], hi[3];
+    CR_UNROLL for (int a = 0; a < 3; ++a) {
+      lo[a] = (real)nb[a * 8 + i];
+      hi[a] = (real)nb[24 + a * 8 + i];
+    }
+    if (Box_Slabs(lo, hi, ray, tmin, tmax, &te[i])) bits |= 1u << i;
+  }
+  return bits;
+#endif
+}
+
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray; `hit` from
+ * Hit_Init. Children nearest first (any hit: in slot order), the others on
+ * the stack with their entry distances (simd/bvh_single.h). */
+CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs,
+                       const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+{
+  (void)hdr;
+  CR_GLOBAL const float* wn = (CR_GLOBAL const float*)nodes;
+  uint stackRef[CR_WIDE_STACK], stackMeta[CR_WIDE_STACK];
+  real stackT[CR_WIDE_STACK];
+  int sp = 0;
+  uint ref = 0u, meta = 0u;
+  for (;;) {
+    if (!(ref & CR_WIDE_LEAF)) {
+      CR_GLOBAL const float* nb = wn + (size_t)ref * CR_WIDE_NODE_WORDS;
+      CR_GLOBAL const uint* child = (CR_GLOBAL const uint*)(nb + 48);
+      CR_GLOBAL const uint* cmeta = (CR_GLOBAL const uint*)(nb + 56);
+      CR_COUNT(st, nTS);
+      real te[8];
+      uint bits = Wide_Children(nb, ray, ray->tmin, Cull_Distance(hit->t), te);
+      if (bits) {
+        const int i0 = Wide_Lowest(bits);
+        bits &= bits - 1u;
+        if (!bits) {
+          ref = child[i0];
+          meta = cmeta[i0];
+          continue;
+        }
+        /* Two or more: push all, farthest deepest, go on with the nearest. */
+        const int base = sp;
+        stackRef[sp] = child[i0];
+        stackMeta[sp] = cmeta[i0];
+        stackT[sp] = te[i0];
+        ++sp;
+        do {
+          const int i = Wide_Lowest(bits);
+          bits &= bits - 1u;
+          int j = sp++;
+          while (!anyHit && j > base && stackT[j - 1] < te[i]) {
+            stackRef[j] = stackRef[j - 1];
+            stackMeta[j] = stackMeta[j - 1];
+            stackT[j] = stackT[j - 1];
+            --j;
+          }
+          stackRef[j] = child[i];
+          stackMeta[j] = cmeta[i];
+          stackT[j] = te[i];
+        } while (bits);
+        --sp;
+        ref = stackRef[sp];
+        meta = stackMeta[sp];
+        continue;
+      }
+    } else {
+      CR_COUNT(st, nTS);
+      CR_COUNT(st, nLeaves);
+      if (Wide_Leaf(pv, refs, ref & ~CR_WIDE_LEAF, meta, ray, hit, anyHit, st)) return;
+    }
+    /* Pop the nearest pending slot that can still hold a closer hit. */
+    for (;;) {
+      if (sp == 0) return;
+      --sp;
+      if (stackT[sp] <= Cull_Distance(hit->t)) {
+        ref = stackRef[sp];
+        meta = stackMeta[sp];
+        break;
+      }
+    }
+  }
+}
+
+#endif /* CELLRAY_KERNELS_BVH_WIDE_CL */
