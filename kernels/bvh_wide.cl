@@ -22,8 +22,9 @@
  * Layout, uploaded by host/cl/cl_tracer.cpp (WideUpload): `nodes` are
  * WideNode<8> (64 words: lower[3][8], upper[3][8], child[8], meta[8]);
  * `refs` starts with CR_NUM_PRIM_TYPES + 1 words: where each type's packs
- * start (triangles: TrianglePack<8> of simd/triangle.h, 88 words; every
- * other type: the 8 unified ids of each pack), then where the mixed leaves
+ * start (triangles: TrianglePack<8> of simd/triangle.h, 88 words; spheres:
+ * SpherePack<8> of simd/sphere.h, 40 words; every other type: the 8 unified
+ * ids of each pack), then where the mixed leaves
  * start (2 words per type each: first pack, packs). A child slot is a node
  * index or CR_WIDE_LEAF | p with its meta word (simd/bvh_wide.h). */
 #ifndef CELLRAY_KERNELS_BVH_WIDE_CL
@@ -33,8 +34,11 @@
 #define CR_WIDE_MIXED 0xffff0000u
 #define CR_WIDE_NODE_WORDS 64
 #define CR_WIDE_TRI_WORDS 88
+#define CR_WIDE_SPHERE_WORDS 40
 /* Each wide level pushes at most 7 entries (simd/bvh_single.h). */
+#ifndef CR_WIDE_STACK
 #define CR_WIDE_STACK (7 * CR_BVH_STACK + 1)
+#endif
 
 #if !defined(CR_FP64) && !CR_HAS_MOTION
 #define CR_WIDE_VECTOR 1
@@ -114,6 +118,45 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   return 0;
 }
 
+/* A sphere pack (centres, radii, ids): the lanes that may hit take
+ * Prim_Intersect. Sphere_Intersect's own misses are dropped, from the same
+ * float operations: robust, a discriminant below its undecided band or
+ * below 0 and decided; fast, the textbook discriminant below 0. */
+CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
+                            TraceStats* st)
+{
+  CR_GLOBAL const uint* g = pk + 32;
+  uint bits = Wide_Bits(vload8(0, g) != (uint8)(CR_NO_HIT));
+  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+#if CR_WIDE_VECTOR
+  CR_GLOBAL const float* c = (CR_GLOBAL const float*)pk; /* center[axis][lane], radius[lane] */
+  const float8 f0 = (float8)(ray->org[0]) - vload8(0, c), f1 = (float8)(ray->org[1]) - vload8(0, c + 8),
+               f2 = (float8)(ray->org[2]) - vload8(0, c + 16);
+  const float8 rad = vload8(0, c + 24);
+  const float d0 = ray->dir[0], d1 = ray->dir[1], d2 = ray->dir[2];
+  const float a = d0 * d0 + d1 * d1 + d2 * d2;
+  const float8 ff = f0 * f0 + f1 * f1 + f2 * f2;
+#ifdef CR_FAST
+  const float8 bh = f0 * d0 + f1 * d1 + f2 * d2;
+  const float8 cq = ff - rad * rad;
+  const float8 b = (float8)(2.0f) * bh;
+  const int8 miss = b * b - (float8)(4.0f * a) * cq < (float8)(0.0f);
+#else
+  const float8 cx = f1 * d2 - f2 * d1, cy = f2 * d0 - f0 * d2, cz = f0 * d1 - f1 * d0;
+  const float8 ar2 = (a * rad) * rad;
+  const float8 cc = cx * cx + cy * cy + cz * cz;
+  const float8 disc = ar2 - cc;
+  const float8 Q = (float8)(0x1.0p-29f) * (ff * a);
+  const int8 undecided = disc * disc <= Q * (cc + (float8)(0x1.0p-9f) * Q);
+  const int8 miss = (disc < (float8)(-0x1.0p15f) * Q) | (~undecided & (disc < (float8)(0.0f)));
+#endif
+  bits &= ~Wide_Bits(miss);
+#endif
+  for (; bits; bits &= bits - 1u)
+    if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
+  return 0;
+}
+
 /* `count` packs of type k from `first`. Returns 1 to stop. */
 CR_FUNC int Wide_Packs(const PrimView* pv, CR_GLOBAL const uint* refs, uint k, uint first, uint count, const Ray* ray,
                        Hit* hit, int anyHit, TraceStats* st)
@@ -122,6 +165,11 @@ CR_FUNC int Wide_Packs(const PrimView* pv, CR_GLOBAL const uint* refs, uint k, u
   if (k == CR_PRIM_TRIANGLE) {
     for (uint p = first; p < first + count; ++p)
       if (Wide_TrianglePack(pv, base + (size_t)p * CR_WIDE_TRI_WORDS, ray, hit, anyHit, st)) return 1;
+    return 0;
+  }
+  if (k == CR_PRIM_SPHERE) {
+    for (uint p = first; p < first + count; ++p)
+      if (Wide_SpherePack(pv, base + (size_t)p * CR_WIDE_SPHERE_WORDS, ray, hit, anyHit, st)) return 1;
     return 0;
   }
   for (uint i = first * 8u; i < (first + count) * 8u; ++i) {
@@ -179,18 +227,17 @@ CR_FUNC uint Wide_Children(CR_GLOBAL const float* nb, const Ray* ray, real tmin,
 #endif
 }
 
-/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray; `hit` from
- * Hit_Init. Children nearest first (any hit: in slot order), the others on
- * the stack with their entry distances (simd/bvh_single.h). */
-CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs,
-                       const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+/* Closest hit (anyHit = 0) or any hit (anyHit = 1) of the ray in the
+ * subtree of slot (ref, meta) (the root: 0, 0); `hit` from Hit_Init or a
+ * closer hit so far. Children nearest first (any hit: in slot order), the
+ * others on the stack with their entry distances (simd/bvh_single.h).
+ * Returns 1 when an occlusion query found its occluder. */
+CR_FUNC int Wide_TraceFrom(CR_GLOBAL const float* wn, CR_GLOBAL const uint* refs, const PrimView* pv, const Ray* ray,
+                           Hit* hit, int anyHit, TraceStats* st, uint ref, uint meta)
 {
-  (void)hdr;
-  CR_GLOBAL const float* wn = (CR_GLOBAL const float*)nodes;
   uint stackRef[CR_WIDE_STACK], stackMeta[CR_WIDE_STACK];
   real stackT[CR_WIDE_STACK];
   int sp = 0;
-  uint ref = 0u, meta = 0u;
   for (;;) {
     if (!(ref & CR_WIDE_LEAF)) {
       CR_GLOBAL const float* nb = wn + (size_t)ref * CR_WIDE_NODE_WORDS;
@@ -235,11 +282,11 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* 
     } else {
       CR_COUNT(st, nTS);
       CR_COUNT(st, nLeaves);
-      if (Wide_Leaf(pv, refs, ref & ~CR_WIDE_LEAF, meta, ray, hit, anyHit, st)) return;
+      if (Wide_Leaf(pv, refs, ref & ~CR_WIDE_LEAF, meta, ray, hit, anyHit, st)) return 1;
     }
     /* Pop the nearest pending slot that can still hold a closer hit. */
     for (;;) {
-      if (sp == 0) return;
+      if (sp == 0) return 0;
       --sp;
       if (stackT[sp] <= Cull_Distance(hit->t)) {
         ref = stackRef[sp];
@@ -249,5 +296,208 @@ CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* 
     }
   }
 }
+
+CR_FUNC void BVH_Trace(CR_GLOBAL const BVHHeader* hdr, CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs,
+                       const PrimView* pv, const Ray* ray, Hit* hit, int anyHit, TraceStats* st)
+{
+  (void)hdr;
+  (void)Wide_TraceFrom((CR_GLOBAL const float*)nodes, refs, pv, ray, hit, anyHit, st, 0u, 0u);
+}
+
+#if defined(CR_BVH_WIDE_PACKET) && !defined(CR_FP64)
+/* The packet form (--variant wide-packet, CR_BVH_WIDE_PACKET): a work-item
+ * walks 8 rays together (Wald, Slusallek, Benthin & Wagner 2001; Embree's
+ * hybrid walk, Benthin et al. 2012, as simd/bvh_wide_packet.h): at a node a
+ * frustum test of the packet against the 8 child boxes at once (when the
+ * lanes share direction signs) picks the children some lane may enter, and
+ * each of those is tested against the lanes that entered the node, float8
+ * across the rays (Box_Slabs lane by lane); children are visited nearest
+ * first by their nearest lane's entry (any hit: in slot order). At a leaf
+ * each entering lane tests it as the per-ray walk does (Wide_Leaf), and when
+ * at most CR_WIDE_PACKET_SINGLE lanes enter a node each finishes that subtree
+ * alone (Wide_TraceFrom). Each lane's answer is the per-ray walk's. */
+#ifndef CR_WIDE_PACKET_SINGLE
+#define CR_WIDE_PACKET_SINGLE 2
+#endif
+
+CR_FUNC float8 Wide_Lanes8(const Ray* ray, int field, int a)
+{
+  float v[8];
+  for (int l = 0; l < 8; ++l)
+    v[l] = field == 0 ? ray[l].org[a] : field == 1 ? ray[l].inv[a] : ray[l].tmin;
+  return vload8(0, v);
+}
+CR_FUNC float8 Wide_Cull8(const Hit* hit)
+{
+  float v[8];
+  for (int l = 0; l < 8; ++l) v[l] = Cull_Distance(hit[l].t);
+  return vload8(0, v);
+}
+CR_FUNC float Wide_HMin(float8 v)
+{
+  const float4 a = fmin(v.lo, v.hi);
+  const float2 b = fmin(a.lo, a.hi);
+  return fmin(b.x, b.y);
+}
+CR_FUNC float Wide_HMax(float8 v)
+{
+  const float4 a = fmax(v.lo, v.hi);
+  const float2 b = fmax(a.lo, a.hi);
+  return fmax(b.x, b.y);
+}
+
+/* The 8 rays ray[0..7] (lanes past `n` copies of ray 0, inactive). */
+CR_FUNC void BVH_TracePacket8(CR_GLOBAL const BVHNode* nodes, CR_GLOBAL const uint* refs, const PrimView* pv,
+                              const Ray* ray, Hit* hit, int n, int anyHit, TraceStats* st)
+{
+  CR_GLOBAL const float* wn = (CR_GLOBAL const float*)nodes;
+  uint stackRef[CR_WIDE_STACK], stackMeta[CR_WIDE_STACK], stackBits[CR_WIDE_STACK];
+  float stackT[CR_WIDE_STACK * 8];
+  int sp = 0;
+  const uint active = n >= 8 ? 0xffu : (1u << n) - 1u;
+  uint done = 0u; /* occlusion: lanes with an occluder */
+  uint bits = active;
+  uint ref = 0u, meta = 0u;
+  float8 org[3], inv[3];
+  int8 neg[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    org[a] = Wide_Lanes8(ray, 0, a);
+    inv[a] = Wide_Lanes8(ray, 1, a);
+    neg[a] = inv[a] < (float8)(0.0f);
+  }
+  const float8 tmin = Wide_Lanes8(ray, 2, 0);
+  /* The packet's frustum in interval form, when every lane goes the same way
+   * along each axis and every component is finite (simd/bvh_wide_packet.h):
+   * bounds on every lane's slab distances from the intervals' corners. */
+  int frustum = 1;
+  float oLo[3], oHi[3], iLo[3], iHi[3];
+  int axisNeg[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    const uint nb = Wide_Bits(neg[a]) & active;
+    frustum = frustum && (nb == 0u || nb == active);
+    const int8 finite = (fabs(org[a]) < (float8)(CR_INF)) & (fabs(inv[a]) < (float8)(CR_INF)) &
+                        (fabs(inv[a]) > (float8)(0.0f));
+    frustum = frustum && (Wide_Bits(finite) & active) == active;
+    oLo[a] = Wide_HMin(org[a]);
+    oHi[a] = Wide_HMax(org[a]);
+    iLo[a] = Wide_HMin(inv[a]);
+    iHi[a] = Wide_HMax(inv[a]);
+    axisNeg[a] = nb != 0u;
+  }
+  const float tminLo = Wide_HMin(tmin);
+  float8 cull = Wide_Cull8(hit);
+  for (;;) {
+    if (popcount(bits) <= CR_WIDE_PACKET_SINGLE) {
+      /* Few lanes: each finishes this subtree alone. */
+      for (uint rest = bits; rest; rest &= rest - 1u) {
+        const int l = Wide_Lowest(rest);
+        if (Wide_TraceFrom(wn, refs, pv, &ray[l], &hit[l], anyHit, &st[l], ref, meta)) done |= 1u << l;
+      }
+      if (anyHit && (done & active) == active) return;
+      cull = Wide_Cull8(hit);
+    } else if (!(ref & CR_WIDE_LEAF)) {
+      CR_GLOBAL const float* nb = wn + (size_t)ref * CR_WIDE_NODE_WORDS;
+      CR_GLOBAL const uint* child = (CR_GLOBAL const uint*)(nb + 48);
+      CR_GLOBAL const uint* cmeta = (CR_GLOBAL const uint*)(nb + 56);
+      for (uint rest = bits; rest; rest &= rest - 1u) CR_COUNT(&st[Wide_Lowest(rest)], nTS);
+      uint cand = 0xffu;
+      if (frustum) {
+        float8 boxNear = (float8)(-CR_INF), boxFar = (float8)(CR_INF);
+        CR_UNROLL for (int a = 0; a < 3; ++a) {
+          const float8 lower = vload8(0, nb + a * 8), upper = vload8(0, nb + 24 + a * 8);
+          float8 nr, fr;
+          if (!axisNeg[a]) {
+            const float8 dn = lower - (float8)(oHi[a]), df = upper - (float8)(oLo[a]);
+            nr = dn * select((float8)(iHi[a]), (float8)(iLo[a]), dn >= (float8)(0.0f));
+            fr = df * select((float8)(iLo[a]), (float8)(iHi[a]), df >= (float8)(0.0f));
+          } else {
+            const float8 dn = upper - (float8)(oLo[a]), df = lower - (float8)(oHi[a]);
+            nr = dn * select((float8)(iHi[a]), (float8)(iLo[a]), dn >= (float8)(0.0f));
+            fr = df * select((float8)(iHi[a]), (float8)(iLo[a]), df <= (float8)(0.0f));
+          }
+          boxNear = fmax(boxNear, nr);
+          boxFar = fmin(boxFar, fr);
+        }
+#ifndef CR_FAST
+        boxFar = boxFar * 1.0000004f;
+#endif
+        const float8 tn = fmax((float8)(tminLo), boxNear), tf = fmin((float8)(Wide_HMax(cull)), boxFar);
+        cand = Wide_Bits(tn <= tf);
+      }
+      uint kidRef[8], kidMeta[8], kidBits[8];
+      float kidT[64], key[8];
+      int nk = 0;
+      for (; cand; cand &= cand - 1u) {
+        const int i = Wide_Lowest(cand);
+        if (child[i] == CR_WIDE_LEAF && cmeta[i] == CR_WIDE_MIXED) continue; /* an unused slot */
+        float8 boxNear = (float8)(-CR_INF), boxFar = (float8)(CR_INF);
+        CR_UNROLL for (int a = 0; a < 3; ++a) {
+          const float8 lo = ((float8)(nb[a * 8 + i]) - org[a]) * inv[a];
+          const float8 hi = ((float8)(nb[24 + a * 8 + i]) - org[a]) * inv[a];
+          boxNear = fmax(boxNear, select(lo, hi, neg[a]));
+          boxFar = fmin(boxFar, select(hi, lo, neg[a]));
+        }
+#ifndef CR_FAST
+        boxFar = boxFar * 1.0000004f;
+#endif
+        const float8 tn = fmax(tmin, boxNear), tf = fmin(cull, boxFar);
+        const uint hb = Wide_Bits(tn <= tf) & bits;
+        if (!hb) continue;
+        int j = nk++;
+        if (!anyHit) {
+          /* Insertion by the nearest lane's entry, farthest first. */
+          const float d = Wide_HMin(select((float8)(CR_INF), tn, tn <= tf));
+          while (j > 0 && key[j - 1] < d) {
+            kidRef[j] = kidRef[j - 1];
+            kidMeta[j] = kidMeta[j - 1];
+            kidBits[j] = kidBits[j - 1];
+            key[j] = key[j - 1];
+            for (int l = 0; l < 8; ++l) kidT[8 * j + l] = kidT[8 * (j - 1) + l];
+            --j;
+          }
+          key[j] = d;
+        }
+        kidRef[j] = child[i];
+        kidMeta[j] = cmeta[i];
+        kidBits[j] = hb;
+        vstore8(tn, j, kidT);
+      }
+      if (nk > 0) {
+        for (int j = 0; j < nk - 1; ++j) {
+          stackRef[sp] = kidRef[j];
+          stackMeta[sp] = kidMeta[j];
+          stackBits[sp] = kidBits[j];
+          vstore8(vload8(j, kidT), sp, stackT);
+          ++sp;
+        }
+        ref = kidRef[nk - 1];
+        meta = kidMeta[nk - 1];
+        bits = kidBits[nk - 1];
+        continue;
+      }
+    } else {
+      for (uint rest = bits; rest; rest &= rest - 1u) {
+        const int l = Wide_Lowest(rest);
+        CR_COUNT(&st[l], nTS);
+        CR_COUNT(&st[l], nLeaves);
+        if (Wide_Leaf(pv, refs, ref & ~CR_WIDE_LEAF, meta, &ray[l], &hit[l], anyHit, &st[l])) done |= 1u << l;
+      }
+      if (anyHit && (done & active) == active) return;
+      cull = Wide_Cull8(hit);
+    }
+    /* Pop the next pending child with a lane that can still find a closer hit. */
+    for (;;) {
+      if (sp == 0) return;
+      --sp;
+      bits = stackBits[sp] & ~done & Wide_Bits(vload8(sp, stackT) <= cull);
+      if (bits) {
+        ref = stackRef[sp];
+        meta = stackMeta[sp];
+        break;
+      }
+    }
+  }
+}
+#endif /* CR_BVH_WIDE_PACKET */
 
 #endif /* CELLRAY_KERNELS_BVH_WIDE_CL */

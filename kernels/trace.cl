@@ -207,8 +207,38 @@ CR_FUNC void Trace_One(const PrimView* pv, CR_TRACE_ONE_PARAMS, CR_GLOBAL const 
 }
 
 /* Per-ray variant: each work-item traverses alone. hits[i] answers rays[i]
- * (at times[i] where hasTimes). */
-#ifndef CR_SOURCE_CAMERA
+ * (at times[i] where hasTimes). The BVH's wide packet walk (CR_BVH_WIDE_PACKET,
+ * kernels/bvh_wide.cl): each work-item traces rays [8 i, 8 i + 8) together. */
+#if !defined(CR_SOURCE_CAMERA) && defined(CR_BVH_WIDE_PACKET) && !defined(CR_FP64)
+__kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
+                         CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes)
+{
+  const uint first = (uint)get_global_id(0) * 8u;
+  if (first >= nRays) return;
+  const int n = nRays - first < 8u ? (int)(nRays - first) : 8;
+  const PrimView pv = Trace_PrimView(CR_PRIM_TYPES(CR_PRIM_ARG_) motion);
+  Ray ray[8];
+  Hit hit[8];
+  TraceStats st[8];
+  for (int l = 0; l < 8; ++l) {
+    /* Lanes past the last ray repeat the first (inactive). */
+    const uint i = first + (uint)(l < n ? l : 0);
+    const RayRecord rec = Trace_LoadRay(rays, i);
+    Ray_Init(&ray[l], &rec);
+    ray[l].anyHit = CR_QUERY_ANYHIT;
+    ray[l].time = (real)Trace_Time(times, hasTimes, i);
+    Hit_Init(&hit[l], &ray[l]);
+    st[l].nIT = st[l].nTS = st[l].nLeaves = st[l].nEmptyLeaves = 0;
+  }
+  BVH_TracePacket8(bvhNodes, bvhRefs, &pv, ray, hit, n, CR_QUERY_ANYHIT, st);
+  (void)bvhHeader;
+  (void)accel;
+  for (int l = 0; l < n; ++l) {
+    Trace_StoreHit(hits, first + (uint)l, Hit_ToRecord(&hit[l], &pv, primIds, CR_QUERY_ANYHIT, CR_QUERY_UNIFIED));
+    Trace_StoreStats(stats, first + (uint)l, &st[l]);
+  }
+}
+#elif !defined(CR_SOURCE_CAMERA)
 __kernel void Trace_Rays(CR_SCENE_PARAMS, CR_GLOBAL const RayRecord* rays, uint nRays, CR_GLOBAL HitRecord* hits,
                          CR_GLOBAL TraceStats* stats, CR_GLOBAL const float* times, int hasTimes)
 {

@@ -339,6 +339,9 @@ void Sweep(Precision precision, const char* variant, bool coldInline = false, co
         // other types' ids and mixed leaves (stc, bqhfg).
         if (std::string(variant) == "wide" && (accel != AccelKind::BVH || &ts == &kTypeSets[0] || &ts == &kTypeSets[2]))
           continue;
+        // The wide packet walk: its node steps and lanes (t, stc).
+        if (std::string(variant) == "wide-packet" && (accel != AccelKind::BVH || (&ts != &kTypeSets[1] && &ts != &kEveryType)))
+          continue;
         const std::string what = fmt::format("{} {} {}:4x4 {} {}", ts.name, AccelKindName(accel), variant,
                                              occlusion ? "occlusion" : "closest", PrecisionName(precision));
         const std::string tag = fmt::format("{}-{}-{}-{}-{}{}{}", ts.name, AccelKindName(accel), variant,
@@ -399,6 +402,12 @@ TEST_CASE("oclgrind: wide BVH walk, robust, types t stc bqhfg x query" * doctest
 TEST_CASE("oclgrind: wide BVH walk, fast, types stc bqhfg, closest hits" * doctest::skip(NoOclgrind()))
 {
   Sweep(Precision::Fast, "wide");
+}
+
+// Eight rays per work-item through the wide layout.
+TEST_CASE("oclgrind: wide packet BVH walk, robust, types t stc x query" * doctest::skip(NoOclgrind()))
+{
+  Sweep(Precision::Robust, "wide-packet");
 }
 
 TEST_CASE("oclgrind: packet kernels, fast, types stc bqhfg x structure, closest hits" * doctest::skip(NoOclgrind()))

@@ -120,7 +120,7 @@ const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, R
 constexpr int kRaySize = 24;  // 576 rays per scene and kind
 
 // Every SPD scene x ray kind with `accel`, for the ray and packet variants
-// (and the BVH's stackless and wide walks; the wide walk's binary BVH is
+// (and the BVH's stackless, wide and wide-packet walks; the wide walks' binary BVH is
 // built with the SIMD backend's parameters, BackendAccelParams, and so is
 // the scalar side it is compared with).
 void RunConformance(AccelKind accel)
@@ -128,7 +128,7 @@ void RunConformance(AccelKind accel)
   auto cache = TestCacheDir();
   std::size_t ties = 0, otherOccluders = 0;
   std::vector<std::string> variants = {"ray", "packet"};
-  if (accel == AccelKind::BVH) variants.insert(variants.end(), {"stackless", "wide"});
+  if (accel == AccelKind::BVH) variants.insert(variants.end(), {"stackless", "wide", "wide-packet"});
   for (const std::string& name : test::SpdScenes()) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
     TraceConfig sc;
@@ -329,7 +329,7 @@ TEST_CASE("opencl: device choice" * doctest::skip(NoOpenCL()))
   CHECK_NOTHROW(ClCheckAllocation(all[0], "test buffer", 1024));
 }
 
-TEST_CASE("opencl: conformance, bvh, ray, packet, stackless and wide variants, every SPD scene x ray kind" *
+TEST_CASE("opencl: conformance, bvh, ray, packet, stackless, wide and wide-packet variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
   RunConformance(AccelKind::BVH);
@@ -426,12 +426,12 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
     TraceStatsSum scalarStats;
     std::vector<HitRecord> ref;
     CreateTracer(scene, sc)->Trace(rays, ref, false, &scalarStats);
-    for (const char* variant : {"ray", "packet", "stackless", "wide"}) {
+    for (const char* variant : {"ray", "packet", "stackless", "wide", "wide-packet"}) {
       TraceConfig cfg = sc;
       cfg.backend = Backend::OpenCL;
       cfg.variant = variant;
       const std::string v = variant;
-      if ((v == "stackless" || v == "wide") && accel != AccelKind::BVH) {
+      if ((v == "stackless" || v == "wide" || v == "wide-packet") && accel != AccelKind::BVH) {
         CHECK_THROWS_AS(CreateTracer(scene, cfg), InputError);  // the BVH's walk only
         continue;
       }

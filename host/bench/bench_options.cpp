@@ -51,12 +51,13 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
   const std::vector<AccelKind> allAccels(std::begin(kAccelKinds), std::end(kAccelKinds));
   if (defaults) {
     // Speed: every structure on the CPU default and on OpenCL, the packet,
-    // stackless and wide variants, Embree.
+    // stackless, wide and wide-packet variants, Embree.
     for (AccelKind a : allAccels) add(Backend::Simd, a, Precision::Robust);
     for (AccelKind a : allAccels) add(Backend::OpenCL, a, Precision::Robust);
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "packet");
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "stackless");
     add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "wide");
+    add(Backend::OpenCL, AccelKind::BVH, Precision::Robust, "wide-packet");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "packet8");
     add(Backend::Embree, AccelKind::BVH, Precision::Robust, "single-robust");
@@ -94,6 +95,7 @@ std::vector<Combo> PlanCombos(const BenchOptions& o, bool openclHasFp64, bool op
           add(b, a, p, "packet");
           add(b, a, p, "stackless");
           add(b, a, p, "wide");
+          if (p != Precision::Fp64) add(b, a, p, "wide-packet");
         }
       }
   }

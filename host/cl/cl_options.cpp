@@ -1,5 +1,6 @@
 #include "host/cl/cl_options.h"
 
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 
@@ -17,7 +18,7 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int
   if (tileW) *tileW = 0;
   if (tileH) *tileH = 0;
   const auto bad = [&] {
-    return InputError(fmt::format("--variant '{}': the opencl backend has ray, stackless and wide (bvh), and packet, each also "
+    return InputError(fmt::format("--variant '{}': the opencl backend has ray, stackless, wide and wide-packet (bvh), and packet, each also "
                                   "as ray-generic, ..., optionally with a work-group tile :WxH (e.g. packet:8x8)",
                                   s));
   };
@@ -36,9 +37,13 @@ void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int
     generic = true;
     v.resize(v.size() - suffix.size());
   }
-  if (v.empty() || v == "ray" || v == "stackless" || v == "wide") {
+  if (v.empty() || v == "ray" || v == "stackless" || v == "wide" || v == "wide-packet") {
     variant = ClVariant::Ray;
-    if (walk) *walk = v == "stackless" ? ClBvhWalk::Stackless : v == "wide" ? ClBvhWalk::Wide : ClBvhWalk::Stack;
+    if (walk)
+      *walk = v == "stackless" ? ClBvhWalk::Stackless
+              : v == "wide"    ? ClBvhWalk::Wide
+              : v == "wide-packet" ? ClBvhWalk::WidePacket
+                                   : ClBvhWalk::Stack;
     return;
   }
   if (v == "packet") {
@@ -52,8 +57,13 @@ const char* ClVariantName(ClVariant v) { return v == ClVariant::Packet ? "packet
 
 const char* ClBvhWalkName(ClBvhWalk w, ClVariant v)
 {
-  return w == ClBvhWalk::Stackless ? "stackless" : w == ClBvhWalk::Wide ? "wide" : ClVariantName(v);
+  return w == ClBvhWalk::Stackless    ? "stackless"
+         : w == ClBvhWalk::Wide       ? "wide"
+         : w == ClBvhWalk::WidePacket ? "wide-packet"
+                                      : ClVariantName(v);
 }
+
+int ClRaysPerItem(ClBvhWalk w) { return w == ClBvhWalk::WidePacket ? 8 : 1; }
 
 bool ClWalksWideBVH(const TraceConfig& config)
 {
@@ -66,7 +76,7 @@ bool ClWalksWideBVH(const TraceConfig& config)
   } catch (const InputError&) {
     return false;
   }
-  return walk == ClBvhWalk::Wide;
+  return walk == ClBvhWalk::Wide || walk == ClBvhWalk::WidePacket;
 }
 
 ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, bool occlusion, bool camera,
@@ -78,6 +88,8 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
   if (s.bvhWalk != ClBvhWalk::Stack && config.accel != AccelKind::BVH)
     throw InputError(fmt::format("--variant {}: the {} walk is the BVH's (--accel bvh), not the {}'s", config.variant,
                                  ClBvhWalkName(s.bvhWalk, s.variant), AccelKindName(config.accel)));
+  if (s.bvhWalk == ClBvhWalk::WidePacket && s.generic)
+    throw InputError(fmt::format("--variant {}: the wide packet walk has no generic program", config.variant));
   if (config.precision == Precision::Fp64 && !dev.fp64)
     throw InputError(fmt::format("--precision fp64: OpenCL device '{}' has no cl_khr_fp64", dev.name));
   s.accel = config.accel;
@@ -162,6 +174,23 @@ ClProgramSpec MakeClProgramSpec(const Scene& scene, const TraceConfig& config, b
                                    dev.name));
     s.coldInline = c == "inline";
   }
+  // For experiments on a kernel's variants (bench/ab_speed.py and by hand):
+  // CELLRAY_CL_DEFINES="NAME=VALUE NAME2" adds -D options to every program
+  // (and so to its cache key: host/cl/cl_program_cache.h).
+  if (const char* defs = std::getenv("CELLRAY_CL_DEFINES"); defs && *defs) {
+    std::string word;
+    for (const char* c = defs;; ++c) {
+      if (*c && *c != ' ') {
+        if (!std::isalnum(static_cast<unsigned char>(*c)) && *c != '_' && *c != '=' && *c != '.' && *c != '-')
+          throw InputError(fmt::format("CELLRAY_CL_DEFINES='{}': expected NAME or NAME=VALUE words", defs));
+        word += *c;
+      } else {
+        if (!word.empty()) s.defines.push_back(word);
+        word.clear();
+        if (!*c) break;
+      }
+    }
+  }
   return s;
 }
 
@@ -175,7 +204,8 @@ std::string ClBuildOptions(const ClProgramSpec& s, const ClDevice& dev)
   if (s.stats) o += " -DCR_STATS";
   if (s.coldInline) o += " -DCR_COLD_INLINE";
   if (s.bvhWalk == ClBvhWalk::Stackless) o += " -DCR_BVH_STACKLESS";
-  if (s.bvhWalk == ClBvhWalk::Wide) o += " -DCR_BVH_WIDE";
+  if (s.bvhWalk == ClBvhWalk::Wide || s.bvhWalk == ClBvhWalk::WidePacket) o += " -DCR_BVH_WIDE";
+  if (s.bvhWalk == ClBvhWalk::WidePacket) o += " -DCR_BVH_WIDE_PACKET";
   if (s.octreeMailbox) o += " -DCR_OCTREE_MAILBOX_BUILD=1";
   if (s.octreeRayMargin) {
     o += " -DCR_OCTREE_MARGIN_BUILD=1";

@@ -18,8 +18,11 @@ enum class ClVariant { Ray, Packet };
 // How the per-ray kernel walks the BVH (kernels/bvh.h): with a stack (the
 // default), without one (CR_BVH_STACKLESS; --variant stackless), or through
 // the SIMD backend's 8-wide layout with float8 (CR_BVH_WIDE; --variant wide,
-// for CPU devices: kernels/bvh_wide.cl).
-enum class ClBvhWalk { Stack, Stackless, Wide };
+// for CPU devices: kernels/bvh_wide.cl), and that layout with 8 rays per
+// work-item (CR_BVH_WIDE_PACKET; --variant wide-packet).
+enum class ClBvhWalk { Stack, Stackless, Wide, WidePacket };
+// Rays per work-item of the rays kernel (wide-packet: 8).
+int ClRaysPerItem(ClBvhWalk w);
 
 struct ClProgramSpec {
   bool generic = false;          // all primitive types and structures, query by argument
@@ -57,7 +60,7 @@ std::string ClBuildOptions(const ClProgramSpec& spec, const ClDevice& dev);
 
 // Parses --variant: "", "ray", "stackless" (the ray kernel with the BVH
 // walked without a stack), "wide" (the ray kernel with the BVH's 8-wide
-// layout), "packet", optionally suffixed "-generic", then
+// layout), "wide-packet" (the same, 8 rays per work-item), "packet", optionally suffixed "-generic", then
 // optionally ":WxH", the work-group tile (packet size; tileW, tileH 0 when
 // absent: the device's default, see MakeClProgramSpec).
 void ParseClVariant(const std::string& s, ClVariant& variant, bool& generic, int* tileW = nullptr,

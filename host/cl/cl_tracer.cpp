@@ -92,7 +92,7 @@ class ClTracer final : public Tracer {
     if (walk_ == ClBvhWalk::Stackless) AddBVHParents(data.bvh, data.info);
     info_ = data.info;
     Upload(data);
-    if (walk_ == ClBvhWalk::Wide) UploadWide(data);
+    if (walk_ == ClBvhWalk::Wide || walk_ == ClBvhWalk::WidePacket) UploadWide(data);
   }
 
   void Prepare(bool occlusion, bool primary) override { (void)Program(occlusion && !primary, primary); }
@@ -124,7 +124,9 @@ class ClTracer final : public Tracer {
     SetArg(k, kArgTimes, timed ? timeBuf_ : dummy_, p.raysName);
     SetArg(k, kArgHasTimes, cl_int(timed ? 1 : 0), p.raysName);
     const std::size_t local = std::size_t(p.spec.packetW) * std::size_t(p.spec.packetH);
-    Launch(k, cl::NDRange(RoundUp(n, local)), cl::NDRange(local), p.raysName);
+    // fp64 programs walk each ray alone (kernels/trace.cl).
+    const std::size_t per = p.spec.precision == Precision::Fp64 ? 1 : std::size_t(ClRaysPerItem(walk_));
+    Launch(k, cl::NDRange(RoundUp((n + per - 1) / per, local)), cl::NDRange(local), p.raysName);
     ReadBack(n, hits, stats);
   }
 
@@ -412,11 +414,12 @@ class ClTracer final : public Tracer {
   // SIMD backend's 8-wide layout with triangle packs of 8 (simd/bvh_wide.h),
   // uploaded as the BVH's nodes and references in place of the binary ones.
   // References: the start of each type's packs and of the mixed leaves, then
-  // the triangle packs as they are (88 words), each other type's packs as
+  // the triangle and sphere packs as they are (88 and 40 words), each other type's packs as
   // their 8 unified ids, each mixed leaf as (first pack, packs) per type.
   void UploadWide(const AccelData& data)
   {
     static_assert(sizeof(simd::TrianglePack<8>) == 88 * sizeof(std::uint32_t));
+    static_assert(sizeof(simd::SpherePack<8>) == 40 * sizeof(std::uint32_t));
     static_assert(sizeof(simd::WideNode<8>) == 64 * sizeof(std::uint32_t));
     const auto t0 = std::chrono::steady_clock::now();
     simd::SimdPrimData rows(scene_);
@@ -427,9 +430,9 @@ class ClTracer final : public Tracer {
     std::vector<std::uint32_t> refs(CR_NUM_PRIM_TYPES + 1, 0u);
     const auto place = [&](std::uint32_t k, const auto& packs) {
       refs[k] = static_cast<std::uint32_t>(refs.size());
-      if (k == CR_PRIM_TRIANGLE) {
+      if (k == CR_PRIM_TRIANGLE || k == CR_PRIM_SPHERE) {
         const auto* words = reinterpret_cast<const std::uint32_t*>(packs.data());
-        refs.insert(refs.end(), words, words + packs.size() * 88);
+        refs.insert(refs.end(), words, words + packs.size() * (sizeof(packs[0]) / sizeof(std::uint32_t)));
       } else {
         for (const auto& p : packs) refs.insert(refs.end(), std::begin(p.g), std::end(p.g));
       }
