@@ -112,10 +112,34 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   const uint8 flags = vload8(0, pk + 80);
   bits &= ~Wide_Bits(miss) | Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != (uint8)(0u));
 #endif
-#endif
+  /* The lanes left: Prim_Intersect's triangle test on the pack's own copy
+   * of the triangle (its line is in the cache; the scene's row may not be). */
+  for (; bits; bits &= bits - 1u) {
+    const int l = Wide_Lowest(bits);
+    Triangle tri;
+    CR_UNROLL for (int a = 0; a < 3; ++a) {
+      tri.v0[a] = v[a * 8 + l];
+      tri.v1[a] = v[(3 + a) * 8 + l];
+      tri.v2[a] = v[(6 + a) * 8 + l];
+    }
+    tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
+    tri.pad1 = 0u;
+    tri.pad2 = 0u;
+    real t, u, w;
+    if (Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w) && Hit_CloserOn(pv, ray, t, g[l], hit)) {
+      hit->t = t;
+      hit->u = u;
+      hit->v = w;
+      hit->g = g[l];
+      if (anyHit) return 1;
+    }
+  }
+  return 0;
+#else
   for (; bits; bits &= bits - 1u)
     if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
   return 0;
+#endif
 }
 
 /* A sphere pack (centres, radii, ids): the lanes that may hit take
@@ -151,10 +175,27 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
   const int8 miss = (disc < (float8)(-0x1.0p15f) * Q) | (~undecided & (disc < (float8)(0.0f)));
 #endif
   bits &= ~Wide_Bits(miss);
-#endif
+  /* The lanes left: Prim_Intersect's sphere test on the pack's copy. */
+  for (; bits; bits &= bits - 1u) {
+    const int l = Wide_Lowest(bits);
+    Sphere sph;
+    CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = c[a * 8 + l];
+    sph.radius = c[24 + l];
+    real t;
+    if (Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t) && Hit_CloserOn(pv, ray, t, g[l], hit)) {
+      hit->t = t;
+      hit->u = (real)0.0f;
+      hit->v = (real)0.0f;
+      hit->g = g[l];
+      if (anyHit) return 1;
+    }
+  }
+  return 0;
+#else
   for (; bits; bits &= bits - 1u)
     if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
   return 0;
+#endif
 }
 
 /* `count` packs of type k from `first`. Returns 1 to stop. */
