@@ -13,8 +13,10 @@
  * only filters: the lanes whose edge functions (Triangle_Intersect's, the
  * same operations) leave the ray's line outside the triangle are dropped,
  * every other lane (and every lane of a triangle with long edges, whose edges
- * Triangle_Intersect may refine) takes Prim_Intersect itself, as do the
- * other types' pieces; hits are kept in Hit_Closer's order, so the closest
+ * Triangle_Intersect may refine) takes Triangle_Intersect on the pack's copy
+ * of its triangle with Prim_Intersect's bookkeeping (Wide_Keep); sphere packs
+ * the same with Sphere_Intersect's misses; the other types' pieces take
+ * Prim_Intersect itself; hits are kept in Hit_Closer's order, so the closest
  * hit does not depend on the visiting order. fp64 and moving scenes walk
  * the same layout with the children tested one at a time (double) and no
  * filter (a moving piece meets a shifted ray).
@@ -59,6 +61,26 @@ CR_FUNC int Wide_Lowest(uint bits) { return 31 - (int)clz(bits & (0u - bits)); }
 #else
 #define CR_WIDE_COUNT_TESTS(st, n) ((void)0)
 #endif
+
+/* Prim_Intersect's bookkeeping for a test run here on piece g: its hit
+ * (t, u, v) kept where Hit_CloserOn says it is closer. */
+CR_FUNC int Wide_Keep(const PrimView* pv, const Ray* ray, int found, real t, real u, real v, uint g, Hit* hit)
+{
+  if (!found || !Hit_CloserOn(pv, ray, t, g, hit)) return 0;
+  hit->t = t;
+  hit->u = u;
+  hit->v = v;
+  hit->g = g;
+  return 1;
+}
+/* The lanes of `bits` of a pack's ids `g` by Prim_Intersect (the scene's
+ * rows). Returns 1 to stop (an occlusion query has its occluder). */
+CR_FUNC int Wide_ByScene(const PrimView* pv, CR_GLOBAL const uint* g, uint bits, const Ray* ray, Hit* hit, int anyHit)
+{
+  for (; bits; bits &= bits - 1u)
+    if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
+  return 0;
+}
 
 /* A triangle pack: the lanes that may hit take Prim_Intersect. Returns 1 to
  * stop (an occlusion query has its occluder). */
@@ -125,20 +147,13 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
     tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
     tri.pad1 = 0u;
     tri.pad2 = 0u;
-    real t, u, w;
-    if (Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w) && Hit_CloserOn(pv, ray, t, g[l], hit)) {
-      hit->t = t;
-      hit->u = u;
-      hit->v = w;
-      hit->g = g[l];
-      if (anyHit) return 1;
-    }
+    real t = (real)0.0f, u = (real)0.0f, w = (real)0.0f;
+    const int found = Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w);
+    if (Wide_Keep(pv, ray, found, t, u, w, g[l], hit) && anyHit) return 1;
   }
   return 0;
 #else
-  for (; bits; bits &= bits - 1u)
-    if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
-  return 0;
+  return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
 #endif
 }
 
@@ -181,20 +196,13 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
     Sphere sph;
     CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = c[a * 8 + l];
     sph.radius = c[24 + l];
-    real t;
-    if (Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t) && Hit_CloserOn(pv, ray, t, g[l], hit)) {
-      hit->t = t;
-      hit->u = (real)0.0f;
-      hit->v = (real)0.0f;
-      hit->g = g[l];
-      if (anyHit) return 1;
-    }
+    real t = (real)0.0f;
+    const int found = Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t);
+    if (Wide_Keep(pv, ray, found, t, (real)0.0f, (real)0.0f, g[l], hit) && anyHit) return 1;
   }
   return 0;
 #else
-  for (; bits; bits &= bits - 1u)
-    if (Prim_Intersect(pv, g[Wide_Lowest(bits)], ray, hit) && anyHit) return 1;
-  return 0;
+  return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
 #endif
 }
 
