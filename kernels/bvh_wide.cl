@@ -31,6 +31,12 @@
  * index or CR_WIDE_LEAF | p with its meta word (simd/bvh_wide.h). */
 #ifndef CELLRAY_KERNELS_BVH_WIDE_CL
 #define CELLRAY_KERNELS_BVH_WIDE_CL
+/* Included by bvh.h under CR_BVH_WIDE (the include below is then empty);
+ * compiled on its own (the kernel header check), it brings bvh.h in. */
+#ifndef CR_BVH_WIDE
+#define CR_BVH_WIDE
+#endif
+#include "bvh.h"
 
 #define CR_WIDE_LEAF 0x80000000u
 #define CR_WIDE_MIXED 0xffff0000u
