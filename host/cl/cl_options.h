@@ -72,5 +72,13 @@ const char* ClBvhWalkName(ClBvhWalk w, ClVariant v);
 // (--accel bvh --variant wide): it then builds with the SIMD backend's
 // parameters (BackendAccelParams).
 bool ClWalksWideBVH(const TraceConfig& config);
+// `config` with the backend's default walk filled in on `dev`: without a
+// --variant, the BVH on a CPU device (PoCL) takes the wide walk, 1.6-1.8x
+// the stack walk's rate there with the same answers (docs/OPENCL.md, "The
+// default walk"); GPUs, accelerators and Oclgrind keep the stack walk, which
+// `--variant ray` names everywhere.
+TraceConfig ClResolveDefaultVariant(const TraceConfig& config, const ClDevice& dev);
+// The default walk's name on `dev` for --accel `accel`: "wide" or "ray".
+const char* ClDefaultBvhWalkName(AccelKind accel, const ClDevice& dev);
 
 }  // namespace cr

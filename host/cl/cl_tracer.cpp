@@ -80,15 +80,18 @@ double MsSince(std::chrono::steady_clock::time_point t0)
 class ClTracer final : public Tracer {
  public:
   ClTracer(const Scene& scene, const TraceConfig& cfg)
-      : scene_(scene), config_(cfg), cl_(CreateClContext(cfg.device))
+      : scene_(scene), cl_(CreateClContext(cfg.device))
   {
-    ParseClVariant(cfg.variant, variant_, generic_);
+    // Without --variant, the device's default walk (the BVH's wide walk on
+    // a CPU device).
+    config_ = ClResolveDefaultVariant(cfg, cl_.dev);
+    ParseClVariant(config_.variant, variant_, generic_);
     // Validate the device and options before the (slow) structure build.
-    const ClProgramSpec spec = MakeClProgramSpec(scene, cfg, false, false, cl_.dev);
+    const ClProgramSpec spec = MakeClProgramSpec(scene, config_, false, false, cl_.dev);
     tileW_ = spec.packetW;
     tileH_ = spec.packetH;
     walk_ = spec.bvhWalk;
-    AccelData data = BuildAccel(scene, cfg.accel, BackendAccelParams(scene, cfg));
+    AccelData data = BuildAccel(scene, config_.accel, BackendAccelParams(scene, config_));
     if (walk_ == ClBvhWalk::Stackless) AddBVHParents(data.bvh, data.info);
     info_ = data.info;
     Upload(data);

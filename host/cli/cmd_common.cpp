@@ -32,7 +32,7 @@ void AddTracerOptions(CLI::App* cmd, TracerOptions& o)
   cmd->add_option("--isa", o.isa, "SIMD instruction set: avx512, avx2, sse4 or scalar (default: best available)");
   cmd->add_option("--device", o.device, "OpenCL device: N or platform:device (default: $CELLRAY_DEVICE, first GPU, else CPU); all, or a list "
                  "N,M: every device named traces, sharing each batch");
-  cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; opencl: ray, stackless or wide (bvh: wide walks 8-wide nodes with float8, for CPU devices), or packet; embree: single, packet8 or packet16 (AVX-512) (-robust: RTC_SCENE_FLAG_ROBUST); default: the backend's choice");
+  cmd->add_option("--variant", o.variant, "Traversal variant: simd: packet, single (ray) or auto; opencl: ray (the BVH with a stack), stackless, wide or wide-packet (bvh: 8-wide nodes with float8, for CPU devices; wide is the BVH's default on a CPU device, ray elsewhere), or packet; embree: single, packet8 or packet16 (AVX-512) (-robust: RTC_SCENE_FLAG_ROBUST); default: the backend's choice");
 }
 
 namespace {
