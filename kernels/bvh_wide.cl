@@ -136,9 +136,24 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   const float8 zero = (float8)(0.0f);
   const int8 miss = (((U < zero) | (V < zero) | (W < zero)) & ((U > zero) | (V > zero) | (W > zero))) |
                     ((U + V + W) == zero);
-  /* Triangles with long edges: Triangle_Intersect may refine their edges. */
+  /* Triangles with long edges: Triangle_Intersect refines a flagged edge
+   * whose float value lies within its rounding bound
+   * (Triangle_LongEdgeUndecided, the same float operations here); a lane
+   * with no such edge is decided by the float edges above, as there. */
+  uint keep = ~Wide_Bits(miss);
   const uint8 flags = vload8(0, pk + 80);
-  bits &= ~Wide_Bits(miss) | Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != (uint8)(0u));
+  const uint8 none = (uint8)(0u);
+  if (Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != none) & bits & ~keep) {
+    const float8 nA = (fabs(vload8(0, v + kx * 8) - ox) + fabs(vload8(0, v + ky * 8) - oy)) + fabs(Az);
+    const float8 nB = (fabs(vload8(0, v + (3 + kx) * 8) - ox) + fabs(vload8(0, v + (3 + ky) * 8) - oy)) + fabs(Bz);
+    const float8 nC = (fabs(vload8(0, v + (6 + kx) * 8) - ox) + fabs(vload8(0, v + (6 + ky) * 8) - oy)) + fabs(Cz);
+    const float8 k = (float8)(0x1.0p-18f);
+    const int8 undecided = (((flags & (uint8)(CR_TRI_LONG_U)) != none) & (fabs(U) <= k * (nB * nC))) |
+                           (((flags & (uint8)(CR_TRI_LONG_V)) != none) & (fabs(V) <= k * (nC * nA))) |
+                           (((flags & (uint8)(CR_TRI_LONG_W)) != none) & (fabs(W) <= k * (nA * nB)));
+    keep |= Wide_Bits(undecided);
+  }
+  bits &= keep;
 #endif
   /* The lanes left: Prim_Intersect's triangle test on the pack's own copy
    * of the triangle (its line is in the cache; the scene's row may not be). */
