@@ -43,6 +43,7 @@
 #define CR_WIDE_NODE_WORDS 64
 #define CR_WIDE_TRI_WORDS 88
 #define CR_WIDE_SPHERE_WORDS 40
+#define CR_WIDE_CONE_WORDS 80
 /* Each wide level pushes at most 7 entries (simd/bvh_single.h). */
 #ifndef CR_WIDE_STACK
 #define CR_WIDE_STACK (7 * CR_BVH_STACK + 1)
@@ -227,6 +228,57 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
 #endif
 }
 
+/* A cone pack (ConePack<8>: base, unit axis w, height H, base radius r0,
+ * slope k, ids, each [lane]: Cone_Intersect's ray-independent terms, computed
+ * by the host with its float operations): the lanes that may hit take
+ * Prim_Intersect. Cone_Intersect's own misses are dropped, from the same
+ * float operations: a cone of no height; or a quadratic case (A != 0) whose
+ * discriminant is below 0 and, robust, not within its rounding of 0 (the
+ * double-float case). */
+CR_FUNC int Wide_ConePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
+                          TraceStats* st)
+{
+  CR_GLOBAL const uint* g = pk + 72;
+  uint bits = Wide_Bits(vload8(0, g) != (uint8)(CR_NO_HIT));
+  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+#if CR_WIDE_VECTOR
+  CR_GLOBAL const float* c = (CR_GLOBAL const float*)pk;
+  float8 dl[3], w[3], d[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    dl[a] = (float8)(ray->org[a]) - vload8(0, c + a * 8);
+    w[a] = vload8(0, c + 24 + a * 8);
+    d[a] = (float8)(ray->dir[a]);
+  }
+  const float8 H = vload8(0, c + 48), r0 = vload8(0, c + 56), k = vload8(0, c + 64);
+  const float8 ds = d[0] * w[0] + d[1] * w[1] + d[2] * w[2];
+  const float8 os = dl[0] * w[0] + dl[1] * w[1] + dl[2] * w[2];
+  float8 dR[3], oR[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) {
+    dR[a] = d[a] - ds * w[a];
+    oR[a] = dl[a] - os * w[a];
+  }
+  const float8 rb = r0 + k * os;
+  const float8 A = (dR[0] * dR[0] + dR[1] * dR[1] + dR[2] * dR[2]) - k * k * ds * ds;
+  const float8 zero = (float8)(0.0f);
+#ifdef CR_FAST
+  const float8 Bh = (oR[0] * dR[0] + oR[1] * dR[1] + oR[2] * dR[2]) - k * ds * rb;
+  const float8 C = (oR[0] * oR[0] + oR[1] * oR[1] + oR[2] * oR[2]) - rb * rb;
+  const int8 quadMiss = (float8)(4.0f) * Bh * Bh - (float8)(4.0f) * A * C < zero;
+#else
+  float8 e[3];
+  CR_UNROLL for (int a = 0; a < 3; ++a) e[a] = rb * dR[a] - k * ds * oR[a];
+  const float8 x0 = oR[1] * dR[2] - oR[2] * dR[1], x1 = oR[2] * dR[0] - oR[0] * dR[2],
+               x2 = oR[0] * dR[1] - oR[1] * dR[0];
+  const float8 ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2], xx = x0 * x0 + x1 * x1 + x2 * x2;
+  const float8 disc = ee - xx;
+  const int8 quadMiss = (disc < zero) & ~(-disc <= (float8)(0x1.0p-20f) * (ee + xx));
+#endif
+  const int8 miss = ~(H > zero) | ((A != zero) & quadMiss);
+  bits &= ~Wide_Bits(miss);
+#endif
+  return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
+}
+
 /* `count` packs of type k from `first`. Returns 1 to stop. */
 CR_FUNC int Wide_Packs(const PrimView* pv, CR_GLOBAL const uint* refs, uint k, uint first, uint count, const Ray* ray,
                        Hit* hit, int anyHit, TraceStats* st)
@@ -240,6 +292,11 @@ CR_FUNC int Wide_Packs(const PrimView* pv, CR_GLOBAL const uint* refs, uint k, u
   if (k == CR_PRIM_SPHERE) {
     for (uint p = first; p < first + count; ++p)
       if (Wide_SpherePack(pv, base + (size_t)p * CR_WIDE_SPHERE_WORDS, ray, hit, anyHit, st)) return 1;
+    return 0;
+  }
+  if (k == CR_PRIM_CONE) {
+    for (uint p = first; p < first + count; ++p)
+      if (Wide_ConePack(pv, base + (size_t)p * CR_WIDE_CONE_WORDS, ray, hit, anyHit, st)) return 1;
     return 0;
   }
   for (uint i = first * 8u; i < (first + count) * 8u; ++i) {

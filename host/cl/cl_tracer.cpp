@@ -417,12 +417,13 @@ class ClTracer final : public Tracer {
   // SIMD backend's 8-wide layout with triangle packs of 8 (simd/bvh_wide.h),
   // uploaded as the BVH's nodes and references in place of the binary ones.
   // References: the start of each type's packs and of the mixed leaves, then
-  // the triangle and sphere packs as they are (88 and 40 words), each other type's packs as
+  // the triangle, sphere and cone packs as they are (88, 40 and 80 words), each other type's packs as
   // their 8 unified ids, each mixed leaf as (first pack, packs) per type.
   void UploadWide(const AccelData& data)
   {
     static_assert(sizeof(simd::TrianglePack<8>) == 88 * sizeof(std::uint32_t));
     static_assert(sizeof(simd::SpherePack<8>) == 40 * sizeof(std::uint32_t));
+    static_assert(sizeof(simd::ConePack<8>) == 80 * sizeof(std::uint32_t));
     static_assert(sizeof(simd::WideNode<8>) == 64 * sizeof(std::uint32_t));
     const auto t0 = std::chrono::steady_clock::now();
     simd::SimdPrimData rows(scene_);
@@ -433,7 +434,7 @@ class ClTracer final : public Tracer {
     std::vector<std::uint32_t> refs(CR_NUM_PRIM_TYPES + 1, 0u);
     const auto place = [&](std::uint32_t k, const auto& packs) {
       refs[k] = static_cast<std::uint32_t>(refs.size());
-      if (k == CR_PRIM_TRIANGLE || k == CR_PRIM_SPHERE) {
+      if (k == CR_PRIM_TRIANGLE || k == CR_PRIM_SPHERE || k == CR_PRIM_CONE) {
         const auto* words = reinterpret_cast<const std::uint32_t*>(packs.data());
         refs.insert(refs.end(), words, words + packs.size() * (sizeof(packs[0]) / sizeof(std::uint32_t)));
       } else {
