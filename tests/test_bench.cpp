@@ -199,6 +199,10 @@ TEST_CASE("bench: configurations planned by default and from lists")
   // The OpenCL BVH's stack walk is a named row: unnamed, it would be the
   // device's default walk (wide on PoCL), a second "opencl bvh wide".
   CHECK(labels.count("opencl bvh") == 0);
+  // The SIMD BVH's walks by name beside auto's, robust only.
+  CHECK(labels.count("simd bvh single") == 1);
+  CHECK(labels.count("simd bvh packet") == 1);
+  CHECK(labels.count("simd bvh single fast") == 0);
   CHECK(labels.count("embree packet8") == (EmbreeAvailable() ? 1u : 0u));
   CHECK(labels.count("embree single robust") == (EmbreeAvailable() ? 1u : 0u));
 
