@@ -89,15 +89,22 @@ CR_FUNC int Wide_ByScene(const PrimView* pv, CR_GLOBAL const uint* g, uint bits,
   return 0;
 }
 
+/* The lanes of a pack whose ids `g` name a piece, counted as tests. */
+CR_FUNC uint Wide_PackLanes(CR_GLOBAL const uint* g, TraceStats* st)
+{
+  const uint bits = Wide_Bits(vload8(0, g) != (uint8)(CR_NO_HIT));
+  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+  (void)st;
+  return bits;
+}
+
 /* A triangle pack: the lanes that may hit take Prim_Intersect. Returns 1 to
  * stop (an occlusion query has its occluder). */
 CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
                               TraceStats* st)
 {
   CR_GLOBAL const uint* g = pk + 72;
-  const uint8 gg = vload8(0, g);
-  uint bits = Wide_Bits(gg != (uint8)(CR_NO_HIT));
-  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+  uint bits = Wide_PackLanes(g, st);
 #if CR_WIDE_VECTOR
   CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* v[vertex][axis][lane] */
 #ifdef CR_FAST
@@ -187,8 +194,7 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
                             TraceStats* st)
 {
   CR_GLOBAL const uint* g = pk + 32;
-  uint bits = Wide_Bits(vload8(0, g) != (uint8)(CR_NO_HIT));
-  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+  uint bits = Wide_PackLanes(g, st);
 #if CR_WIDE_VECTOR
   CR_GLOBAL const float* c = (CR_GLOBAL const float*)pk; /* center[axis][lane], radius[lane] */
   const float8 f0 = (float8)(ray->org[0]) - vload8(0, c), f1 = (float8)(ray->org[1]) - vload8(0, c + 8),
@@ -239,8 +245,7 @@ CR_FUNC int Wide_ConePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ra
                           TraceStats* st)
 {
   CR_GLOBAL const uint* g = pk + 72;
-  uint bits = Wide_Bits(vload8(0, g) != (uint8)(CR_NO_HIT));
-  CR_WIDE_COUNT_TESTS(st, (uint)popcount(bits));
+  uint bits = Wide_PackLanes(g, st);
 #if CR_WIDE_VECTOR
   CR_GLOBAL const float* c = (CR_GLOBAL const float*)pk;
   float8 dl[3], w[3], d[3];

@@ -79,18 +79,10 @@ bool ClWalksWideBVH(const TraceConfig& config)
   return walk == ClBvhWalk::Wide || walk == ClBvhWalk::WidePacket;
 }
 
-const char* ClDefaultBvhWalkName(AccelKind accel, const ClDevice& dev)
-{
-  return accel == AccelKind::BVH && dev.type == "cpu" && !dev.simulator ? "wide" : "ray";
-}
-
 TraceConfig ClResolveDefaultVariant(const TraceConfig& config, const ClDevice& dev)
 {
   TraceConfig c = config;
-  if (c.variant.empty()) {
-    const std::string walk = ClDefaultBvhWalkName(c.accel, dev);
-    if (walk != "ray") c.variant = walk;
-  }
+  if (c.variant.empty() && c.accel == AccelKind::BVH && dev.type == "cpu" && !dev.simulator) c.variant = "wide";
   return c;
 }
 

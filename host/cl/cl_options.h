@@ -78,7 +78,5 @@ bool ClWalksWideBVH(const TraceConfig& config);
 // default walk"); GPUs, accelerators and Oclgrind keep the stack walk, which
 // `--variant ray` names everywhere.
 TraceConfig ClResolveDefaultVariant(const TraceConfig& config, const ClDevice& dev);
-// The default walk's name on `dev` for --accel `accel`: "wide" or "ray".
-const char* ClDefaultBvhWalkName(AccelKind accel, const ClDevice& dev);
 
 }  // namespace cr
