@@ -171,14 +171,23 @@ glm::dvec3 RefNormal(const Sdf& s, const glm::dvec3& x)
 void RefBall(const Sdf& s, glm::dvec3& mid, double& reach) { StoredRefBall(s, mid, reach); }
 
 // The ray's closest approaches: the local minima of the distance along the
-// reference march.
+// reference march, and where the ray enters and leaves the bound. A surface
+// that meets the bound's face (a cylinder's cap on the face) may lie just
+// outside the bound in double and just inside it in float: the reference
+// march leaves the bound before it and finds no root, while a tracer hits it
+// within eps at the face (a downward ray out of the cylinder standing on
+// scenes/geometry/sdf.nff's ground, the face at y = 0).
 void RefNearTimes(const Sdf& s, const ref::DRay& r, double t0, double t1, std::vector<double>& ts)
 {
   ref::DRay w = r;
   w.tmin = t0;
   w.tmax = t1;
   std::vector<double> mins;
-  double th;
+  double th, b0, b1;
+  if (BoundInterval(s, w, b0, b1)) {
+    mins.push_back(b0);
+    mins.push_back(b1);
+  }
   if (RefMarch(s, w, th, &mins)) mins.push_back(th);
   for (double t : mins)
     if (t >= t0 && t <= t1) ts.push_back(t);
