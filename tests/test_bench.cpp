@@ -187,6 +187,46 @@ TEST_CASE("bench: the SDF axis runs a scene with SDF blocks once per eps x relax
   fs::remove_all(dir);
 }
 
+TEST_CASE("bench: timed runs in rounds over a scene's rows by default, back to back with --no-interleave")
+{
+  const fs::path dir = TempDir("interleave");
+  const std::string common = "bench tetra --backend scalar,simd --accel grid,bvh --precision robust --kinds primary,shadow "
+                             "--rays 512 --repeat 3 --no-images --no-plots --no-stats --out ";
+  std::string errA, errB;
+  REQUIRE(RunBinary(common + (dir / "a").string(), dir, &errA) == 0);
+  REQUIRE(RunBinary(common + (dir / "b").string() + " --no-interleave", dir, &errB) == 0);
+  CHECK(errA.find("tetra: 12 rows built and checked; timing them in 3 interleaved rounds") != std::string::npos);
+  CHECK(errB.find("interleaved rounds") == std::string::npos);
+  const auto load = [&](const char* name) {
+    std::ifstream in(dir / name / "results.json");
+    return nlohmann::json::parse(in);
+  };
+  const nlohmann::json a = load("a"), b = load("b");
+  CHECK(a["options"]["interleave"] == true);
+  CHECK(b["options"]["interleave"] == false);
+  // The same rows in the same order, the same answers, three timed runs
+  // each, and each configuration's memory its own.
+  REQUIRE(a["rows"].size() == 12);  // scalar grid, bvh; simd grid, bvh (auto, single, packet) x 2 kinds
+  REQUIRE(b["rows"].size() == a["rows"].size());
+  for (std::size_t i = 0; i < a["rows"].size(); ++i) {
+    const auto &ra = a["rows"][i], &rb = b["rows"][i];
+    INFO("row ", i);
+    CHECK(ra["backend"] == rb["backend"]);
+    CHECK(ra["accel"] == rb["accel"]);
+    CHECK(ra["kind"] == rb["kind"]);
+    CHECK(ra["hits"] == rb["hits"]);
+    CHECK(ra["error"]["wrong"] == 0);
+    CHECK(ra["repeat"] == 3);
+    CHECK(rb["repeat"] == 3);
+    CHECK(ra["interleaved"] == true);
+    CHECK(rb["interleaved"] == false);
+    CHECK(ra["trace_ms"]["min"].get<double>() > 0.0);
+    CHECK(ra["trace_ms"]["min"].get<double>() <= ra["trace_ms"]["max"].get<double>());
+    CHECK(ra["variant"] == rb["variant"]);
+  }
+  fs::remove_all(dir);
+}
+
 TEST_CASE("bench: configurations planned by default and from lists")
 {
   bench::BenchOptions o;

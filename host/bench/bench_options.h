@@ -32,6 +32,13 @@ struct BenchOptions {
   std::vector<Precision> precisions;
   std::vector<RayKind> kinds = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
   int repeat = 5;                 // timed runs per row (median, min, max)
+  // Timed runs taken in rounds across every row of a scene (each round runs
+  // each row once), so that a drift of the machine's speed during the run
+  // falls on every configuration alike; scenes above interleaveMaxPieces run
+  // each row's timed runs back to back (every configuration's structure would
+  // be held at once). false: back to back everywhere.
+  bool interleave = true;
+  std::uint64_t interleaveMaxPieces = 1000000;
   std::uint64_t rays = 1u << 16;  // rays per set (primary: an image of about this many pixels)
   std::string outDir = "bench-out";
   int threads = 0;                // 0: all cores

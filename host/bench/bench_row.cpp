@@ -33,6 +33,7 @@ void to_json(nlohmann::json& j, const Row& r)
     // The fastest run gives the highest rate.
     j["mrays_per_s"] = {{"median", rate(r.timing.medianMs)}, {"min", rate(r.timing.maxMs)}, {"max", rate(r.timing.minMs)}};
     j["repeat"] = r.timing.repeat;
+    j["interleaved"] = r.interleaved;
     if (r.timing.kernelMedianMs >= 0.0) {
       j["kernel_ms"] = {{"median", r.timing.kernelMedianMs}, {"min", r.timing.kernelMinMs}, {"max", r.timing.kernelMaxMs}};
       j["kernel_mrays_per_s"] = {{"median", rate(r.timing.kernelMedianMs)}, {"min", rate(r.timing.kernelMaxMs)},

@@ -42,10 +42,14 @@ struct Row {
   int threads = 0;
   AccelInfo structure;
   Timing timing;
+  bool interleaved = false;  // timed in rounds over the scene's rows (BenchOptions::interleave)
   std::optional<PerRay> perRay;  // absent where the backend has no counters (Embree)
   std::optional<ErrorSummary> error;
   std::uint64_t hits = 0;  // rays answered with a hit (occluded, for shadow rays)
-  std::uint64_t peakRssBytes = 0;  // process peak since this configuration's build began (0: unknown)
+  // Process peak since this configuration's build began, less what the
+  // scene's earlier configurations still hold under interleaved timing
+  // (0: unknown).
+  std::uint64_t peakRssBytes = 0;
   std::string note;        // e.g. why a row was skipped
 };
 

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdio>
 #include <ctime>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -70,14 +71,20 @@ double LoadAverage1()
   return a;
 }
 
-std::uint64_t PeakRssBytes()
+namespace {
+std::uint64_t StatusKb(const char* key)  // "VmHWM:   1234 kB" -> bytes
 {
   std::ifstream f("/proc/self/status");
   std::string line;
+  const std::size_t n = std::strlen(key);
   while (std::getline(f, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stoull(line.substr(6)) * 1024;  // "VmHWM:   1234 kB"
+    if (line.rfind(key, 0) == 0) return std::stoull(line.substr(n)) * 1024;
   return 0;
 }
+}  // namespace
+
+std::uint64_t PeakRssBytes() { return StatusKb("VmHWM:"); }
+std::uint64_t CurrentRssBytes() { return StatusKb("VmRSS:"); }
 
 bool ResetPeakRss()
 {

@@ -22,6 +22,7 @@ double LoadAverage1();
 // includes what is alive across configurations (the scene, the reference,
 // the ray sets). 0 / false where unsupported.
 std::uint64_t PeakRssBytes();
+std::uint64_t CurrentRssBytes();  // VmRSS (0: unknown)
 bool ResetPeakRss();
 
 // UTC date and time, ISO 8601.

@@ -40,25 +40,27 @@ ErrorSummary Summarise(const ref::CheckResult& c)
 
 }  // namespace
 
-Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, const std::vector<float>& times, bool occlusion,
-                 int repeat, std::vector<HitRecord>& hits)
+namespace {
+
+// One timed Trace() of a prepared tracer: its wall time and, where the backend
+// reports one, its kernels' time.
+void TimeOnce(Tracer& tracer, const std::vector<RayRecord>& rays, const std::vector<float>& times, bool occlusion,
+              std::vector<HitRecord>& scratch, std::vector<double>& ms, std::vector<double>& kernelMs)
 {
-  tracer.Prepare(occlusion);
-  tracer.Trace(rays, times, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
-  std::vector<double> ms, kernelMs;
-  std::vector<HitRecord> scratch;
-  for (int r = 0; r < repeat; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    tracer.Trace(rays, times, scratch, occlusion, nullptr);
-    ms.push_back(MsSince(t0));
-    if (tracer.LastKernelMs() >= 0.0) kernelMs.push_back(tracer.LastKernelMs());
-  }
+  const auto t0 = std::chrono::steady_clock::now();
+  tracer.Trace(rays, times, scratch, occlusion, nullptr);
+  ms.push_back(MsSince(t0));
+  if (tracer.LastKernelMs() >= 0.0) kernelMs.push_back(tracer.LastKernelMs());
+}
+
+Timing TimingOf(std::vector<double> ms, std::vector<double> kernelMs)
+{
   const auto median = [](std::vector<double>& v) {
     std::sort(v.begin(), v.end());
     return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
   };
   Timing t;
-  t.repeat = repeat;
+  t.repeat = int(ms.size());
   if (!ms.empty()) {
     t.medianMs = median(ms);
     t.minMs = ms.front();
@@ -70,6 +72,30 @@ Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, const std::
     t.kernelMaxMs = kernelMs.back();
   }
   return t;
+}
+
+// A row whose timed runs wait for the scene's rounds (interleaved timing).
+struct PendingRow {
+  std::size_t row;  // index in the rows
+  Tracer* tracer;
+  const RaySet* set;
+  bool occlusion;
+  std::vector<double> ms, kernelMs;
+  std::string variant;  // what the tracer ran on this row's last timed run
+  bool failed = false;
+};
+
+}  // namespace
+
+Timing TimeTrace(Tracer& tracer, const std::vector<RayRecord>& rays, const std::vector<float>& times, bool occlusion,
+                 int repeat, std::vector<HitRecord>& hits)
+{
+  tracer.Prepare(occlusion);
+  tracer.Trace(rays, times, hits, occlusion, nullptr);  // warm-up: caches, lazy device work; its answers are checked
+  std::vector<double> ms, kernelMs;
+  std::vector<HitRecord> scratch;
+  for (int r = 0; r < repeat; ++r) TimeOnce(tracer, rays, times, occlusion, scratch, ms, kernelMs);
+  return TimingOf(std::move(ms), std::move(kernelMs));
 }
 
 // The settings of the bench's SDF axis (BenchOptions::sdfEps, sdfRelax,
@@ -95,7 +121,7 @@ std::vector<SdfSetting> SdfSettings(const BenchOptions& o, const Scene& scene)
 }
 
 std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>& scenes, const std::vector<Combo>& combos,
-                             const RowCallback& onRow)
+                             const RowCallback& onRow, const NoteCallback& onNote)
 {
   std::vector<Row> rows;
   std::size_t total = scenes.size() * combos.size() * o.kinds.size();
@@ -119,6 +145,13 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
     }
     const std::string suffix = setting.suffix;
     std::map<std::pair<std::size_t, std::size_t>, ErrorSummary> checked;  // (kind index, hits hash)
+    // Interleaved timing: every configuration is built, warmed up and checked
+    // first, its tracer kept; then `repeat` rounds each time every row once.
+    const bool interleave = o.interleave && o.repeat > 1 && scene.NumUnified() <= o.interleaveMaxPieces;
+    std::vector<std::unique_ptr<Tracer>> held;
+    std::vector<PendingRow> pending;
+    const std::size_t firstRow = rows.size();
+    const std::uint64_t sceneRss = interleave ? CurrentRssBytes() : 0;
 
     for (const Combo& combo : combos) {
       Row proto;
@@ -139,6 +172,9 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
       std::unique_ptr<Tracer> tracer, statsTracer;
       std::string skip;
       const bool rssKnown = ResetPeakRss();
+      // What the earlier configurations' tracers hold (interleaved timing):
+      // not this row's.
+      const std::uint64_t heldRss = interleave ? CurrentRssBytes() - std::min(CurrentRssBytes(), sceneRss) : 0;
       try {
         tracer = CreateTracer(scene, cfg);
         proto.structure = tracer->Info();
@@ -166,7 +202,13 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         } else {
           try {
             std::vector<HitRecord> hits;
-            row.timing = TimeTrace(*tracer, set.rays, set.times, occlusion, o.repeat, hits);
+            if (interleave) {
+              tracer->Prepare(occlusion);
+              tracer->Trace(set.rays, set.times, hits, occlusion, nullptr);  // warm-up, as TimeTrace's
+              pending.push_back(PendingRow{rows.size(), tracer.get(), &set, occlusion, {}, {}, {}});
+            } else {
+              row.timing = TimeTrace(*tracer, set.rays, set.times, occlusion, o.repeat, hits);
+            }
             row.variantRan = tracer->VariantName();
             for (const auto& h : hits) row.hits += h.prim != CR_NO_HIT;
             if (wantStats) {
@@ -194,10 +236,41 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
             row.note = fmt::format("failed: {}", e.what());
           }
         }
-        if (rssKnown) row.peakRssBytes = PeakRssBytes();
+        if (rssKnown) row.peakRssBytes = PeakRssBytes() - std::min(PeakRssBytes(), heldRss);
         rows.push_back(row);
-        if (onRow) onRow(rows.back(), rows.size(), total);
+        if (onRow && !interleave) onRow(rows.back(), rows.size(), total);
       }
+      if (interleave && tracer) held.push_back(std::move(tracer));
+    }
+    if (interleave) {
+      if (onNote)
+        onNote(fmt::format("{}: {} rows built and checked; timing them in {} interleaved rounds", sref.name + suffix,
+                           pending.size(), o.repeat));
+      std::vector<HitRecord> scratch;
+      for (int r = 0; r < o.repeat; ++r)
+        for (PendingRow& p : pending) {
+          if (p.failed) continue;
+          try {
+            p.tracer->Prepare(p.occlusion);
+            TimeOnce(*p.tracer, p.set->rays, p.set->times, p.occlusion, scratch, p.ms, p.kernelMs);
+            p.variant = p.tracer->VariantName();
+          } catch (const InputError& e) {
+            rows[p.row].note = fmt::format("failed: {}", e.what());
+            p.failed = true;
+          } catch (const RuntimeError& e) {
+            rows[p.row].note = fmt::format("failed: {}", e.what());
+            p.failed = true;
+          }
+        }
+      for (PendingRow& p : pending)
+        if (!p.failed) {
+          rows[p.row].timing = TimingOf(std::move(p.ms), std::move(p.kernelMs));
+          rows[p.row].variantRan = p.variant;
+          rows[p.row].interleaved = true;
+        }
+      held.clear();
+      if (onRow)
+        for (std::size_t i = firstRow; i < rows.size(); ++i) onRow(rows[i], i + 1, total);
     }
     }
   }

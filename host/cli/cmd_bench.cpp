@@ -97,7 +97,8 @@ json OptionsJson(const bench::BenchOptions& o, int threads)
   CR_ACCEL_PARAMS(CR_BENCH_PARAM_JSON)
 #undef CR_BENCH_PARAM_JSON
   return json{{"rays", o.rays},   {"repeat", o.repeat}, {"threads", threads}, {"kinds", kinds},
-              {"quick", o.quick}, {"seed", o.seed},     {"stats", o.stats},   {"structure_params", params}};
+              {"quick", o.quick}, {"seed", o.seed},     {"stats", o.stats},   {"structure_params", params},
+              {"interleave", o.interleave}, {"interleave_max_pieces", o.interleaveMaxPieces}};
 }
 
 // Runs bench/plot.py on DIR with the first python3 that has matplotlib (the
@@ -128,7 +129,8 @@ Run RegisterBench(CLI::App& app)
     int repeat = -1, threads = 0;
     std::uint64_t rays = 0, seed = 1;
     std::string out = "bench-out", imageScene, device;
-    bool hard = false, scaling = false, quick = false, noImages = false, noPlots = false, noStats = false;
+    bool hard = false, scaling = false, quick = false, noImages = false, noPlots = false, noStats = false,
+         noInterleave = false;
     std::string imageIntegrator, imageDiffuse, imageSize;
     std::vector<int> imageSpps;
     int imageReferenceSpp = 0;
@@ -180,6 +182,9 @@ Run RegisterBench(CLI::App& app)
   cmd->add_flag("--no-images", o->noImages, "Skip the spp-against-error image study");
   cmd->add_flag("--no-plots", o->noPlots, "Do not run bench/plot.py");
   cmd->add_flag("--no-stats", o->noStats, "Skip the statistics runs (Havran's per-ray measures)");
+  cmd->add_flag("--no-interleave", o->noInterleave,
+                "Time each row's runs back to back (default: in rounds over all of a scene's rows, each round "
+                "running every row once, for scenes up to 10^6 primitives; the scaling study always back to back)");
   return [o]() {
     const auto t0 = Clock::now();
     bench::BenchOptions b;
@@ -191,6 +196,7 @@ Run RegisterBench(CLI::App& app)
     b.seed = o->seed;
     b.device = o->device;
     b.stats = !o->noStats;
+    b.interleave = !o->noInterleave;
     b.images = !o->noImages;
     b.sdfEps = o->sdfEps;
     b.sdfRelax = o->sdfRelax;
@@ -292,9 +298,9 @@ Run RegisterBench(CLI::App& app)
       if (combos.empty()) throw InputError("bench: no configuration to run (check --backend/--accel/--precision)");
       fmt::print(stderr, "bench: {} scenes x {} configurations x {} ray kinds, {} rays per set, {} timed runs, {} threads\n",
                  scenes.size(), combos.size(), b.kinds.size(), b.rays, b.repeat, threads);
-      const auto rows = bench::RunRayBench(b, scenes, combos, [&](const bench::Row& r, std::size_t i, std::size_t n) {
-        PrintRow(r, i, n, t0);
-      });
+      const auto rows = bench::RunRayBench(
+          b, scenes, combos, [&](const bench::Row& r, std::size_t i, std::size_t n) { PrintRow(r, i, n, t0); },
+          [](const std::string& note) { fmt::print(stderr, "bench: {}\n", note); });
       nRows += rows.size();
       results["rows"] = RowsJson(rows);
       results.erase("images");
