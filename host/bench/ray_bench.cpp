@@ -251,7 +251,11 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         for (PendingRow& p : pending) {
           if (p.failed) continue;
           try {
+            // An untimed run first: the other rows have since filled the
+            // caches with their structures, and a back-to-back run finds
+            // its own there (the rounds measure drift, not a cold cache).
             p.tracer->Prepare(p.occlusion);
+            p.tracer->Trace(p.set->rays, p.set->times, scratch, p.occlusion, nullptr);
             TimeOnce(*p.tracer, p.set->rays, p.set->times, p.occlusion, scratch, p.ms, p.kernelMs);
             p.variant = p.tracer->VariantName();
           } catch (const InputError& e) {
