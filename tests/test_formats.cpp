@@ -187,6 +187,21 @@ TEST_CASE("check: the tolerance belongs to the ray and its hit, not to the primi
   CHECK(ref::IsWrong(verdict(down, HitRecord{float(t * (1.0 + 1e-4)), 0u, 0, 0}, false)));
   CHECK(ref::IsWrong(verdict(down, HitRecord{float(t * (1.0 - 1e-4)), 0u, 0, 0}, false)));
   CHECK(ref::CheckDelta(40.0, 28.0, t) == doctest::Approx(0x1p-16 * (40.0 + 28.0 * t)));
+  // The relative t error of a hit at about t = 0 (a ray from the ground
+  // meeting it again, t_ref 1e-12 reported as 0): relative to what the ray
+  // resolves (2^-24 |o|inf / |d|inf = 6e-8 here, so 1.7e-5), not to t_ref
+  // (1.0).
+  {
+    Scene flat;
+    ParseNFF("f 1 1 1 1 0 0 0 0\np 4\n-5 0 -5\n-5 0 5\n5 0 5\n5 0 -5\n", "flat", flat);
+    const ref::ReferenceTracer ft(flat);
+    const RayRecord graze{{1.0f, 1e-12f, 0.0f}, 0.0f, {0.0f, -1.0f, 0.0f}, INFINITY};
+    std::vector<ref::RefHit> scratch;
+    double rel = -1.0;
+    CHECK(ref::Adjudicate(ft, graze, HitRecord{0.0f, 0u, 0, 0}, false, &rel, scratch) == ref::Verdict::Agree);
+    CHECK(rel > 0.0);
+    CHECK(rel < 1e-4);
+  }
 
   // Exactly tangent to the top of the unit sphere, the ground far below:
   // the reference hits (a double root); a reported miss is a flip, counted
