@@ -174,7 +174,8 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
       const bool rssKnown = ResetPeakRss();
       // What the earlier configurations' tracers hold (interleaved timing):
       // not this row's.
-      const std::uint64_t heldRss = interleave ? CurrentRssBytes() - std::min(CurrentRssBytes(), sceneRss) : 0;
+      const std::uint64_t rssNow = interleave ? CurrentRssBytes() : 0;
+      const std::uint64_t heldRss = rssNow - std::min(rssNow, sceneRss);
       try {
         tracer = CreateTracer(scene, cfg);
         proto.structure = tracer->Info();
