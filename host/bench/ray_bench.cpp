@@ -203,13 +203,9 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         } else {
           try {
             std::vector<HitRecord> hits;
-            if (interleave) {
-              tracer->Prepare(occlusion);
-              tracer->Trace(set.rays, set.times, hits, occlusion, nullptr);  // warm-up, as TimeTrace's
-              pending.push_back(PendingRow{rows.size(), tracer.get(), &set, occlusion, {}, {}, {}});
-            } else {
-              row.timing = TimeTrace(*tracer, set.rays, set.times, occlusion, o.repeat, hits);
-            }
+            // Interleaved: the warm-up only here, the timed runs in the rounds.
+            row.timing = TimeTrace(*tracer, set.rays, set.times, occlusion, interleave ? 0 : o.repeat, hits);
+            if (interleave) pending.push_back(PendingRow{rows.size(), tracer.get(), &set, occlusion, {}, {}, {}});
             row.variantRan = tracer->VariantName();
             for (const auto& h : hits) row.hits += h.prim != CR_NO_HIT;
             if (wantStats) {
@@ -248,6 +244,10 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
         onNote(fmt::format("{}: {} rows built and checked; timing them in {} interleaved rounds", sref.name + suffix,
                            pending.size(), o.repeat));
       std::vector<HitRecord> scratch;
+      const auto fail = [&](PendingRow& p, const char* what) {
+        rows[p.row].note = fmt::format("failed: {}", what);
+        p.failed = true;
+      };
       for (int r = 0; r < o.repeat; ++r)
         for (PendingRow& p : pending) {
           if (p.failed) continue;
@@ -260,11 +260,9 @@ std::vector<Row> RunRayBench(const BenchOptions& o, const std::vector<SceneRef>&
             TimeOnce(*p.tracer, p.set->rays, p.set->times, p.occlusion, scratch, p.ms, p.kernelMs);
             p.variant = p.tracer->VariantName();
           } catch (const InputError& e) {
-            rows[p.row].note = fmt::format("failed: {}", e.what());
-            p.failed = true;
+            fail(p, e.what());
           } catch (const RuntimeError& e) {
-            rows[p.row].note = fmt::format("failed: {}", e.what());
-            p.failed = true;
+            fail(p, e.what());
           }
         }
       for (PendingRow& p : pending)

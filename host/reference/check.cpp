@@ -192,9 +192,8 @@ Verdict Adjudicate(const ReferenceTracer& tr, const RayRecord& rec, float time, 
     // to the smallest distance the ray resolves: the float rounding of its
     // origin along it (2^-24 |o|inf / |d|inf); a t of 2e-15 reported as 0
     // is not an error of 100%.
-    const double dInf = std::max({std::fabs(r.d.x), std::fabs(r.d.y), std::fabs(r.d.z)});
-    const double oInf = std::max({std::fabs(r.o.x), std::fabs(r.o.y), std::fabs(r.o.z)});
-    const double floor = dInf > 0.0 ? std::ldexp(oInf / dInf, -24) : 0.0;
+    const double dInf = MaxAbs(r.d);
+    const double floor = dInf > 0.0 ? std::ldexp(MaxAbs(r.o) / dInf, -24) : 0.0;
     const double scale = std::max(ref.t, floor);
     *relErr = scale > 0.0 ? std::fabs(t - ref.t) / scale : std::fabs(t - ref.t);
     return Verdict::Agree;
