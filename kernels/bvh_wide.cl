@@ -44,6 +44,11 @@
 #define CR_WIDE_TRI_WORDS 88
 #define CR_WIDE_SPHERE_WORDS 40
 #define CR_WIDE_CONE_WORDS 80
+/* A triangle pack's flag bits above Triangle.flags' own: the shortest edge
+ * (Triangle_PlaneNormal's k: 1 or 2; neither: 0), simd/triangle.h's
+ * kPackShortEdge1 and kPackShortEdge2. */
+#define CR_WIDE_TRI_SHORT1 0x100u
+#define CR_WIDE_TRI_SHORT2 0x200u
 /* Each wide level pushes at most 7 entries (simd/bvh_single.h). */
 #ifndef CR_WIDE_STACK
 #define CR_WIDE_STACK (7 * CR_BVH_STACK + 1)
@@ -98,6 +103,53 @@ CR_FUNC uint Wide_PackLanes(CR_GLOBAL const uint* g, TraceStats* st)
   return bits;
 }
 
+/* A triangle or sphere pack's lanes after its float8 test (type k): `found`
+ * hit at (t8, u8, v8), lane by lane; `refine` take Triangle_Intersect or
+ * Sphere_Intersect itself on the pack's own copy of their piece (its line is
+ * in the cache; the scene's row may not be). Both in lane order with
+ * Prim_Intersect's bookkeeping (Wide_Keep), as a loop of those tests would
+ * give: the float8 range test used the hit at the pack's start, and
+ * Hit_CloserOn refuses what a nearer lane has since beaten (what the float8
+ * path decides does not depend on the range's far end otherwise). Returns 1
+ * to stop (an occlusion query has its occluder). */
+CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint found, uint refine, CR_GLOBAL const uint* pk,
+                           float8 t8, float8 u8, float8 v8, CR_GLOBAL const uint* g, Hit* hit, int anyHit)
+{
+  uint bits = found | refine;
+  if (!bits) return 0;
+  float tt[8], uu[8], vv[8];
+  vstore8(t8, 0, tt);
+  vstore8(u8, 0, uu);
+  vstore8(v8, 0, vv);
+  CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* [vertex][axis][lane]; spheres: [axis][lane], radii */
+  for (; bits; bits &= bits - 1u) {
+    const int l = Wide_Lowest(bits);
+    real t = tt[l], u = uu[l], w = vv[l];
+    int ok = 1;
+    if ((refine >> l) & 1u) {
+      if (k == CR_PRIM_TRIANGLE) {
+        Triangle tri;
+        CR_UNROLL for (int a = 0; a < 3; ++a) {
+          tri.v0[a] = v[a * 8 + l];
+          tri.v1[a] = v[(3 + a) * 8 + l];
+          tri.v2[a] = v[(6 + a) * 8 + l];
+        }
+        tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
+        tri.pad1 = 0u;
+        tri.pad2 = 0u;
+        ok = Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w);
+      } else {
+        Sphere sph;
+        CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = v[a * 8 + l];
+        sph.radius = v[24 + l];
+        ok = Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t);
+      }
+    }
+    if (Wide_Keep(pv, ray, ok, t, u, w, g[l], hit) && anyHit) return 1;
+  }
+  return 0;
+}
+
 /* A triangle pack: the lanes that may hit take Prim_Intersect. Returns 1 to
  * stop (an occlusion query has its occluder). */
 CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
@@ -130,6 +182,11 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   const int8 miss = (fabs(det) < (float8)(1e-9f)) | (u < (float8)(0.0f)) | (u > (float8)(1.0f)) |
                     (vv < (float8)(0.0f)) | (u + vv > (float8)(1.0f));
   bits &= ~Wide_Bits(miss);
+  if (!bits) return 0;
+  /* Its t and range test (a NaN t passes there, as here; Hit_CloserOn refuses it). */
+  const float8 t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) * invDet;
+  const uint found = bits & ~Wide_Bits((t < (float8)(ray->tmin)) | (t > (float8)(hit->t)));
+  return Wide_KeepLanes(pv, ray, CR_PRIM_TRIANGLE, found, 0u, pk, t, u, vv, g, hit, anyHit);
 #else
   /* Triangle_Intersect's watertight edge functions. */
   const int kx = ray->kx, ky = ray->ky, kz = ray->kz;
@@ -148,7 +205,7 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
    * whose float value lies within its rounding bound
    * (Triangle_LongEdgeUndecided, the same float operations here); a lane
    * with no such edge is decided by the float edges above, as there. */
-  uint keep = ~Wide_Bits(miss);
+  uint keep = ~Wide_Bits(miss), refine = 0u;
   const uint8 flags = vload8(0, pk + 80);
   const uint8 none = (uint8)(0u);
   if (Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != none) & bits & ~keep) {
@@ -159,28 +216,52 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
     const int8 undecided = (((flags & (uint8)(CR_TRI_LONG_U)) != none) & (fabs(U) <= k * (nB * nC))) |
                            (((flags & (uint8)(CR_TRI_LONG_V)) != none) & (fabs(V) <= k * (nC * nA))) |
                            (((flags & (uint8)(CR_TRI_LONG_W)) != none) & (fabs(W) <= k * (nA * nB)));
-    keep |= Wide_Bits(undecided);
+    refine = Wide_Bits(undecided);
+    keep |= refine;
   }
   bits &= keep;
-#endif
-  /* The lanes left: Prim_Intersect's triangle test on the pack's own copy
-   * of the triangle (its line is in the cache; the scene's row may not be). */
-  for (; bits; bits &= bits - 1u) {
-    const int l = Wide_Lowest(bits);
-    Triangle tri;
-    CR_UNROLL for (int a = 0; a < 3; ++a) {
-      tri.v0[a] = v[a * 8 + l];
-      tri.v1[a] = v[(3 + a) * 8 + l];
-      tri.v2[a] = v[(6 + a) * 8 + l];
+  if (!bits) return 0;
+  /* The rest of Triangle_Intersect for the lanes left, float8 (its
+   * operations lane by lane, as simd/triangle.h's Triangle_PlaneKN): t from
+   * the plane of the shortest edge and its successor (the pack's flag bits,
+   * PackShortEdge) through the vertex they share. Lanes that refine there
+   * take Triangle_Intersect itself: a long edge within its rounding (above),
+   * the plane inexact with t possibly in range (Triangle_PlaneNeedsDf), or
+   * all three edges within their rounding (Triangle_EdgesUndecided). */
+  const int8 k1 = (flags & (uint8)(CR_WIDE_TRI_SHORT1)) != none, k2 = (flags & (uint8)(CR_WIDE_TRI_SHORT2)) != none;
+  float8 n[3], p[3];
+  {
+    float8 ea[3], eb[3];
+    CR_UNROLL for (int i = 0; i < 3; ++i) {
+      const float8 v0 = vload8(0, v + i * 8), v1 = vload8(0, v + (3 + i) * 8), v2 = vload8(0, v + (6 + i) * 8);
+      const float8 e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2, o = (float8)(ray->org[i]);
+      /* k 0: e0, e1, v1; k 1: e1, e2, v2; k 2: e2, e0, v0. */
+      ea[i] = select(select(e0, e1, k1), e2, k2);
+      eb[i] = select(select(e1, e2, k1), e0, k2);
+      p[i] = select(select(v1 - o, v2 - o, k1), v0 - o, k2);
     }
-    tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
-    tri.pad1 = 0u;
-    tri.pad2 = 0u;
-    real t = (real)0.0f, u = (real)0.0f, w = (real)0.0f;
-    const int found = Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w);
-    if (Wide_Keep(pv, ray, found, t, u, w, g[l], hit) && anyHit) return 1;
+    n[0] = ea[1] * eb[2] - ea[2] * eb[1];
+    n[1] = ea[2] * eb[0] - ea[0] * eb[2];
+    n[2] = ea[0] * eb[1] - ea[1] * eb[0];
   }
-  return 0;
+  const float8 nd = n[0] * (float8)(ray->dir[0]) + n[1] * (float8)(ray->dir[1]) + n[2] * (float8)(ray->dir[2]);
+  const float8 np0 = n[0] * p[0], np1 = n[1] * p[1], np2 = n[2] * p[2];
+  const float8 np = (np0 + np1) + np2, sum = (fabs(np0) + fabs(np1)) + fabs(np2);
+  const float8 t = np / nd;
+  const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
+  const float8 an = fabs(nd), tn = t * an, slack = (float8)(0.25f) * fabs(tn) + (float8)(0x1.0p-20f) * sum;
+  const int8 nearPlane = (sum > (float8)(16.0f) * fabs(np)) & (tn + slack >= tmin * an) & (tn - slack <= tmax * an);
+  const float8 nA = (fabs(vload8(0, v + kx * 8) - ox) + fabs(vload8(0, v + ky * 8) - oy)) + fabs(Az);
+  const float8 nB = (fabs(vload8(0, v + (3 + kx) * 8) - ox) + fabs(vload8(0, v + (3 + ky) * 8) - oy)) + fabs(Bz);
+  const float8 nC = (fabs(vload8(0, v + (6 + kx) * 8) - ox) + fabs(vload8(0, v + (6 + ky) * 8) - oy)) + fabs(Cz);
+  const float8 k19 = (float8)(0x1.0p-19f);
+  const int8 degenerate = (fabs(U) <= k19 * (nB * nC)) & (fabs(V) <= k19 * (nC * nA)) & (fabs(W) <= k19 * (nA * nB));
+  const int8 inRange = (t >= tmin) & (t <= tmax) & (nd != zero);
+  refine = (refine | Wide_Bits((nearPlane & (nd != zero)) | degenerate)) & bits;
+  const float8 invDet = (float8)(1.0f) / (U + V + W);
+  return Wide_KeepLanes(pv, ray, CR_PRIM_TRIANGLE, bits & ~refine & Wide_Bits(inRange), refine, pk, t, V * invDet, W * invDet, g, hit,
+                        anyHit);
+#endif
 #else
   return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
 #endif
@@ -207,7 +288,17 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
   const float8 bh = f0 * d0 + f1 * d1 + f2 * d2;
   const float8 cq = ff - rad * rad;
   const float8 b = (float8)(2.0f) * bh;
-  const int8 miss = b * b - (float8)(4.0f * a) * cq < (float8)(0.0f);
+  const float8 disc4 = b * b - (float8)(4.0f * a) * cq;
+  bits &= ~Wide_Bits(disc4 < (float8)(0.0f));
+  if (!bits) return 0;
+  /* The rest of Sphere_Intersect, float8: the roots, then the nearer in range. */
+  const float8 sq = sqrt(disc4), a2 = (float8)(2.0f * a);
+  const float8 t0 = (-b - sq) / a2, t1 = (-b + sq) / a2;
+  const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
+  const int8 in0 = (t0 >= tmin) & (t0 <= tmax), in1 = (t1 >= tmin) & (t1 <= tmax);
+  const uint found = bits & Wide_Bits(in0 | in1);
+  const float8 zero = (float8)(0.0f);
+  return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, found, 0u, pk, select(t1, t0, in0), zero, zero, g, hit, anyHit);
 #else
   const float8 cx = f1 * d2 - f2 * d1, cy = f2 * d0 - f0 * d2, cz = f0 * d1 - f1 * d0;
   const float8 ar2 = (a * rad) * rad;
@@ -216,19 +307,34 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
   const float8 Q = (float8)(0x1.0p-29f) * (ff * a);
   const int8 undecided = disc * disc <= Q * (cc + (float8)(0x1.0p-9f) * Q);
   const int8 miss = (disc < (float8)(-0x1.0p15f) * Q) | (~undecided & (disc < (float8)(0.0f)));
-#endif
   bits &= ~Wide_Bits(miss);
-  /* The lanes left: Prim_Intersect's sphere test on the pack's copy. */
-  for (; bits; bits &= bits - 1u) {
-    const int l = Wide_Lowest(bits);
-    Sphere sph;
-    CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = c[a * 8 + l];
-    sph.radius = c[24 + l];
-    real t = (real)0.0f;
-    const int found = Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t);
-    if (Wide_Keep(pv, ray, found, t, (real)0.0f, (real)0.0f, g[l], hit) && anyHit) return 1;
-  }
-  return 0;
+  if (!bits) return 0;
+  /* The rest of Sphere_Intersect, float8 (its operations lane by lane): the
+   * stable roots (Quadratic_Roots), then the nearer in range. Lanes whose
+   * answer float may not decide take Sphere_Intersect itself: an undecided
+   * discriminant (Sphere_DiscUndecided) or one not >= 0, and every lane where
+   * Sphere_NeedsDf looks further (c or the discriminant cancelling: its
+   * first test), so what is decided here does not depend on [tmin, tmax]
+   * beyond the range test. */
+  const float8 bh = f0 * d0 + f1 * d1 + f2 * d2;
+  const float8 r2 = rad * rad, cq = ff - r2, cScale = ff + r2;
+  const float8 dScale = ar2 + cc, dd = disc * (bh * bh + disc);
+  const int8 looks = (cScale > (float8)(8.0f) * fabs(cq)) | (dScale * dScale > (float8)(64.0f) * dd);
+  const uint refine = bits & Wide_Bits(undecided | ~(disc >= (float8)(0.0f)) | looks);
+  const float8 zero = (float8)(0.0f);
+  /* Only such lanes (a ray leaving a sphere's surface meets that sphere so). */
+  if (bits == refine) return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, 0u, refine, pk, zero, zero, zero, g, hit, anyHit);
+  const float8 sq = copysign(sqrt(disc), bh), q = -(bh + sq);
+  const float8 va = (float8)(a);
+  const float8 r0 = q / va;
+  const int8 stable = (float8)(16.0f) * q * q >= va * cScale;
+  const float8 r1 = select(sq - bh, cq, stable) / select(va, q, stable);
+  const float8 t0 = fmin(r0, r1), t1 = fmax(r0, r1);
+  const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
+  const int8 in0 = (t0 >= tmin) & (t0 <= tmax), in1 = (t1 >= tmin) & (t1 <= tmax);
+  const uint found = bits & ~refine & Wide_Bits(in0 | in1);
+  return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, found, refine, pk, select(t1, t0, in0), zero, zero, g, hit, anyHit);
+#endif
 #else
   return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
 #endif

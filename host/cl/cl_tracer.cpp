@@ -425,6 +425,8 @@ class ClTracer final : public Tracer {
     static_assert(sizeof(simd::SpherePack<8>) == 40 * sizeof(std::uint32_t));
     static_assert(sizeof(simd::ConePack<8>) == 80 * sizeof(std::uint32_t));
     static_assert(sizeof(simd::WideNode<8>) == 64 * sizeof(std::uint32_t));
+    // kernels/bvh_wide.cl reads the shortest edge from these bits (CR_WIDE_TRI_SHORT1, 2).
+    static_assert(simd::kPackShortEdge1 == 0x100u && simd::kPackShortEdge2 == 0x200u);
     const auto t0 = std::chrono::steady_clock::now();
     simd::SimdPrimData rows(scene_);
     simd::KernelScene sc;
