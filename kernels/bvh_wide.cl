@@ -112,6 +112,27 @@ CR_FUNC uint Wide_PackLanes(CR_GLOBAL const uint* g, TraceStats* st)
  * Hit_CloserOn refuses what a nearer lane has since beaten (what the float8
  * path decides does not depend on the range's far end otherwise). Returns 1
  * to stop (an occlusion query has its occluder). */
+CR_COLD CR_FUNC int Wide_RefineLane(uint k, CR_GLOBAL const uint* pk, int l, const Ray* ray, const Hit* hit, real* t,
+                                    real* u, real* w)
+{
+  CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* [vertex][axis][lane]; spheres: [axis][lane], radii */
+  if (k == CR_PRIM_TRIANGLE) {
+    Triangle tri;
+    CR_UNROLL for (int a = 0; a < 3; ++a) {
+      tri.v0[a] = v[a * 8 + l];
+      tri.v1[a] = v[(3 + a) * 8 + l];
+      tri.v2[a] = v[(6 + a) * 8 + l];
+    }
+    tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
+    tri.pad1 = 0u;
+    tri.pad2 = 0u;
+    return Triangle_Intersect(ray, &tri, ray->tmin, hit->t, t, u, w);
+  }
+  Sphere sph;
+  CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = v[a * 8 + l];
+  sph.radius = v[24 + l];
+  return Sphere_Intersect(ray, &sph, ray->tmin, hit->t, t);
+}
 CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint found, uint refine, CR_GLOBAL const uint* pk,
                            float8 t8, float8 u8, float8 v8, CR_GLOBAL const uint* g, Hit* hit, int anyHit)
 {
@@ -121,30 +142,10 @@ CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint foun
   vstore8(t8, 0, tt);
   vstore8(u8, 0, uu);
   vstore8(v8, 0, vv);
-  CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* [vertex][axis][lane]; spheres: [axis][lane], radii */
   for (; bits; bits &= bits - 1u) {
     const int l = Wide_Lowest(bits);
     real t = tt[l], u = uu[l], w = vv[l];
-    int ok = 1;
-    if ((refine >> l) & 1u) {
-      if (k == CR_PRIM_TRIANGLE) {
-        Triangle tri;
-        CR_UNROLL for (int a = 0; a < 3; ++a) {
-          tri.v0[a] = v[a * 8 + l];
-          tri.v1[a] = v[(3 + a) * 8 + l];
-          tri.v2[a] = v[(6 + a) * 8 + l];
-        }
-        tri.flags = pk[80 + l] & CR_TRI_LONG_EDGES;
-        tri.pad1 = 0u;
-        tri.pad2 = 0u;
-        ok = Triangle_Intersect(ray, &tri, ray->tmin, hit->t, &t, &u, &w);
-      } else {
-        Sphere sph;
-        CR_UNROLL for (int a = 0; a < 3; ++a) sph.center[a] = v[a * 8 + l];
-        sph.radius = v[24 + l];
-        ok = Sphere_Intersect(ray, &sph, ray->tmin, hit->t, &t);
-      }
-    }
+    const int ok = ((refine >> l) & 1u) ? Wide_RefineLane(k, pk, l, ray, hit, &t, &u, &w) : 1;
     if (Wide_Keep(pv, ray, ok, t, u, w, g[l], hit) && anyHit) return 1;
   }
   return 0;
