@@ -43,6 +43,18 @@ cl::Buffer ClUpload(const ClContext& c, const char* what, const void* data, std:
   return b;
 }
 
+cl::Buffer ClWrapHost(const ClContext& c, const char* what, void* data, std::size_t bytes, cl_mem_flags flags)
+{
+  ClCheckAllocation(c.dev, what, bytes);
+  if (ClFaultInjected(ClFault::Alloc))
+    ThrowClError(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer", __FILE__, __LINE__,
+                 fmt::format("{} ({} bytes, in place){}", what, bytes, ClFaultNote(ClFault::Alloc)));
+  cl_int err = CL_SUCCESS;
+  cl::Buffer b(c.context, flags | CL_MEM_USE_HOST_PTR, bytes, data, &err);
+  CR_CL_CHECK_WHAT(err, "clCreateBuffer", fmt::format("{} ({} bytes, in place)", what, bytes));
+  return b;
+}
+
 cl::Buffer ClAlloc(const ClContext& c, const char* what, std::size_t bytes, cl_mem_flags flags)
 {
   if (bytes == 0) bytes = 64;

@@ -25,6 +25,10 @@ ClContext CreateClContext(const std::string& spec);
 // RuntimeError naming `what` when the device cannot hold it.
 cl::Buffer ClUpload(const ClContext& c, const char* what, const void* data, std::size_t bytes);
 
+// A buffer over the host's own `bytes` bytes at `data` (CL_MEM_USE_HOST_PTR | flags): a CPU device
+// reads and writes them in place. `data` must outlive the buffer's use.
+cl::Buffer ClWrapHost(const ClContext& c, const char* what, void* data, std::size_t bytes, cl_mem_flags flags);
+
 // An uninitialised buffer of `bytes` bytes with `flags`.
 cl::Buffer ClAlloc(const ClContext& c, const char* what, std::size_t bytes, cl_mem_flags flags);
 

@@ -4,6 +4,7 @@
 // the structure are uploaded once; rays per Trace call (or generated on the
 // device for TracePrimary); hits and per-ray counters are read back.
 #include <chrono>
+#include <cstring>
 #include <optional>
 
 #include <fmt/format.h>
@@ -109,13 +110,23 @@ class ClTracer final : public Tracer {
     if (rays.empty()) return;
     const std::size_t n = rays.size();
     if (n > 0xFFFFFFFFu) throw RuntimeError("OpenCL: more than 2^32 - 1 rays in one batch");
-    EnsureRayBuffers(n, true);
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueWriteBuffer(rayBuf_, CL_FALSE, 0, n * sizeof(RayRecord), rays.data()),
-                     "clEnqueueWriteBuffer", "rays");
+    // A CPU device shares the host's memory: its kernel reads the caller's rays and writes the hits where
+    // they are (CL_MEM_USE_HOST_PTR; a blocking map of the hits then makes them the host's), instead of
+    // a copy of each into a buffer and back. Other devices copy.
+    const bool inPlace = cl_.dev.type == "cpu";
+    EnsureRayBuffers(n, !inPlace);
+    cl::Buffer rayBuf = rayBuf_, hitBuf = hitBuf_;
+    if (inPlace) {
+      rayBuf = ClWrapHost(cl_, "rays", const_cast<RayRecord*>(rays.data()), n * sizeof(RayRecord), CL_MEM_READ_ONLY);
+      hitBuf = ClWrapHost(cl_, "hits", hits.data(), n * sizeof(HitRecord), CL_MEM_WRITE_ONLY);
+    } else {
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueWriteBuffer(rayBuf_, CL_FALSE, 0, n * sizeof(RayRecord), rays.data()),
+                       "clEnqueueWriteBuffer", "rays");
+    }
     cl::Kernel& k = p.rays;
-    SetArg(k, kArgRays, rayBuf_, p.raysName);
+    SetArg(k, kArgRays, rayBuf, p.raysName);
     SetArg(k, kArgNRays, cl_uint(n), p.raysName);
-    SetArg(k, kArgRaysHits, hitBuf_, p.raysName);
+    SetArg(k, kArgRaysHits, hitBuf, p.raysName);
     SetArg(k, kArgRaysStats, config_.stats ? statsBuf_ : dummy_, p.raysName);
     const bool timed = !times.empty() && scene_.hasMotion;
     if (timed) {
@@ -130,7 +141,7 @@ class ClTracer final : public Tracer {
     // fp64 programs walk each ray alone (kernels/trace.cl).
     const std::size_t per = p.spec.precision == Precision::Fp64 ? 1 : std::size_t(ClRaysPerItem(walk_));
     Launch(k, cl::NDRange(RoundUp((n + per - 1) / per, local)), cl::NDRange(local), p.raysName);
-    ReadBack(n, hits, stats);
+    ReadBack(n, hits, stats, inPlace ? &hitBuf : nullptr);
   }
 
   void TracePrimary(const CameraFrame& frame, int width, int height, std::vector<HitRecord>& hits,
@@ -485,10 +496,25 @@ class ClTracer final : public Tracer {
     }
   }
 
-  void ReadBack(std::size_t n, std::vector<HitRecord>& hits, TraceStatsSum* stats)
+  // The hits into `hits`: read from hitBuf_, or, with `inPlace` (a buffer over hits.data() itself,
+  // CL_MEM_USE_HOST_PTR), mapped and unmapped, which leaves them there (copied only where the
+  // implementation kept them elsewhere).
+  void ReadBack(std::size_t n, std::vector<HitRecord>& hits, TraceStatsSum* stats, cl::Buffer* inPlace = nullptr)
   {
-    CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(hitBuf_, CL_TRUE, 0, n * sizeof(HitRecord), hits.data()),
-                     "clEnqueueReadBuffer", "hits");
+    const std::size_t bytes = n * sizeof(HitRecord);
+    if (inPlace) {
+      cl_int err = CL_SUCCESS;
+      void* m = cl_.queue.enqueueMapBuffer(*inPlace, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr, nullptr, &err);
+      CR_CL_CHECK_WHAT(err, "clEnqueueMapBuffer", "hits");
+      if (m != hits.data()) std::memcpy(hits.data(), m, bytes);
+      cl::Event unmapped;
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueUnmapMemObject(*inPlace, m, nullptr, &unmapped), "clEnqueueUnmapMemObject",
+                       "hits");
+      CR_CL_CHECK_WHAT(unmapped.wait(), "clWaitForEvents", "hits unmapped");
+    } else {
+      CR_CL_CHECK_WHAT(cl_.queue.enqueueReadBuffer(hitBuf_, CL_TRUE, 0, bytes, hits.data()), "clEnqueueReadBuffer",
+                       "hits");
+    }
     lastKernelMs_ = KernelMs(lastLaunch_);
     if (config_.stats && stats) {
       std::vector<std::uint32_t> per(4 * n);
