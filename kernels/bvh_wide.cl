@@ -323,18 +323,24 @@ CR_FUNC int Wide_SpherePack(const PrimView* pv, CR_GLOBAL const uint* pk, const 
   const int8 looks = (cScale > (float8)(8.0f) * fabs(cq)) | (dScale * dScale > (float8)(64.0f) * dd);
   const uint refine = bits & Wide_Bits(undecided | ~(disc >= (float8)(0.0f)) | looks);
   const float8 zero = (float8)(0.0f);
-  /* Only such lanes (a ray leaving a sphere's surface meets that sphere so). */
-  if (bits == refine) return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, 0u, refine, pk, zero, zero, zero, g, hit, anyHit);
-  const float8 sq = copysign(sqrt(disc), bh), q = -(bh + sq);
-  const float8 va = (float8)(a);
-  const float8 r0 = q / va;
-  const int8 stable = (float8)(16.0f) * q * q >= va * cScale;
-  const float8 r1 = select(sq - bh, cq, stable) / select(va, q, stable);
-  const float8 t0 = fmin(r0, r1), t1 = fmax(r0, r1);
-  const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
-  const int8 in0 = (t0 >= tmin) & (t0 <= tmax), in1 = (t1 >= tmin) & (t1 <= tmax);
-  const uint found = bits & ~refine & Wide_Bits(in0 | in1);
-  return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, found, refine, pk, select(t1, t0, in0), zero, zero, g, hit, anyHit);
+  uint found = 0u;
+  float8 t = zero;
+  /* Not when only such lanes are left (a ray leaving a sphere's surface
+   * meets that sphere so). One call of Wide_KeepLanes below, which PoCL
+   * then inlines. */
+  if (bits != refine) {
+    const float8 sq = copysign(sqrt(disc), bh), q = -(bh + sq);
+    const float8 va = (float8)(a);
+    const float8 r0 = q / va;
+    const int8 stable = (float8)(16.0f) * q * q >= va * cScale;
+    const float8 r1 = select(sq - bh, cq, stable) / select(va, q, stable);
+    const float8 t0 = fmin(r0, r1), t1 = fmax(r0, r1);
+    const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
+    const int8 in0 = (t0 >= tmin) & (t0 <= tmax), in1 = (t1 >= tmin) & (t1 <= tmax);
+    found = bits & ~refine & Wide_Bits(in0 | in1);
+    t = select(t1, t0, in0);
+  }
+  return Wide_KeepLanes(pv, ray, CR_PRIM_SPHERE, found, refine, pk, t, zero, zero, g, hit, anyHit);
 #endif
 #else
   return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
