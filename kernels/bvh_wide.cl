@@ -103,19 +103,25 @@ CR_FUNC uint Wide_PackLanes(CR_GLOBAL const uint* g, TraceStats* st)
   return bits;
 }
 
-/* A triangle or sphere pack's lanes after its float8 test (type k): `found`
- * hit at (t8, u8, v8), lane by lane; `refine` take Triangle_Intersect or
- * Sphere_Intersect itself on the pack's own copy of their piece (its line is
- * in the cache; the scene's row may not be). Both in lane order with
+/* A triangle, sphere or cone pack's lanes after its float8 test (type k):
+ * `found` hit at (t8, u8, v8), lane by lane; `refine` take Triangle_Intersect
+ * or Sphere_Intersect itself on the pack's own copy of their piece (its line
+ * is in the cache; the scene's row may not be), or Cone_Intersect on the
+ * scene's row. Both in lane order with
  * Prim_Intersect's bookkeeping (Wide_Keep), as a loop of those tests would
  * give: the float8 range test used the hit at the pack's start, and
  * Hit_CloserOn refuses what a nearer lane has since beaten (what the float8
  * path decides does not depend on the range's far end otherwise). Returns 1
  * to stop (an occlusion query has its occluder). */
-CR_COLD CR_FUNC int Wide_RefineLane(uint k, CR_GLOBAL const uint* pk, int l, const Ray* ray, const Hit* hit, real* t,
-                                    real* u, real* w)
+CR_COLD CR_FUNC int Wide_RefineLane(const PrimView* pv, uint k, CR_GLOBAL const uint* pk, int l, uint g,
+                                    const Ray* ray, const Hit* hit, real* t, real* u, real* w)
 {
   CR_GLOBAL const float* v = (CR_GLOBAL const float*)pk; /* [vertex][axis][lane]; spheres: [axis][lane], radii */
+  if (k == CR_PRIM_CONE) {
+    /* The pack holds the cone's derived terms: the scene's row. */
+    const Cone cn = pv->cones[Prim_Local(&pv->ranges, CR_PRIM_CONE, g)];
+    return Cone_Intersect(ray, &cn, ray->tmin, hit->t, t);
+  }
   if (k == CR_PRIM_TRIANGLE) {
     Triangle tri;
     CR_UNROLL for (int a = 0; a < 3; ++a) {
@@ -133,7 +139,9 @@ CR_COLD CR_FUNC int Wide_RefineLane(uint k, CR_GLOBAL const uint* pk, int l, con
   sph.radius = v[24 + l];
   return Sphere_Intersect(ray, &sph, ray->tmin, hit->t, t);
 }
-CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint found, uint refine, CR_GLOBAL const uint* pk,
+/* Inlined into each pack test (PoCL would not inline it into three; its
+ * call passes three float8 on the stack). */
+__attribute__((always_inline)) CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint found, uint refine, CR_GLOBAL const uint* pk,
                            float8 t8, float8 u8, float8 v8, CR_GLOBAL const uint* g, Hit* hit, int anyHit)
 {
   uint bits = found | refine;
@@ -145,7 +153,7 @@ CR_FUNC int Wide_KeepLanes(const PrimView* pv, const Ray* ray, uint k, uint foun
   for (; bits; bits &= bits - 1u) {
     const int l = Wide_Lowest(bits);
     real t = tt[l], u = uu[l], w = vv[l];
-    const int ok = ((refine >> l) & 1u) ? Wide_RefineLane(k, pk, l, ray, hit, &t, &u, &w) : 1;
+    const int ok = ((refine >> l) & 1u) ? Wide_RefineLane(pv, k, pk, l, g[l], ray, hit, &t, &u, &w) : 1;
     if (Wide_Keep(pv, ray, ok, t, u, w, g[l], hit) && anyHit) return 1;
   }
   return 0;
@@ -378,10 +386,12 @@ CR_FUNC int Wide_ConePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ra
   const float8 rb = r0 + k * os;
   const float8 A = (dR[0] * dR[0] + dR[1] * dR[1] + dR[2] * dR[2]) - k * k * ds * ds;
   const float8 zero = (float8)(0.0f);
-#ifdef CR_FAST
+  const float8 oo = oR[0] * oR[0] + oR[1] * oR[1] + oR[2] * oR[2];
   const float8 Bh = (oR[0] * dR[0] + oR[1] * dR[1] + oR[2] * dR[2]) - k * ds * rb;
-  const float8 C = (oR[0] * oR[0] + oR[1] * oR[1] + oR[2] * oR[2]) - rb * rb;
-  const int8 quadMiss = (float8)(4.0f) * Bh * Bh - (float8)(4.0f) * A * C < zero;
+  const float8 C = oo - rb * rb;
+#ifdef CR_FAST
+  const float8 disc4 = (float8)(4.0f) * Bh * Bh - (float8)(4.0f) * A * C;
+  const int8 quadMiss = disc4 < zero;
 #else
   float8 e[3];
   CR_UNROLL for (int a = 0; a < 3; ++a) e[a] = rb * dR[a] - k * ds * oR[a];
@@ -393,8 +403,48 @@ CR_FUNC int Wide_ConePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ra
 #endif
   const int8 miss = ~(H > zero) | ((A != zero) & quadMiss);
   bits &= ~Wide_Bits(miss);
+  if (!bits) return 0;
+  /* The rest of Cone_Intersect, float8 (its operations lane by lane): the
+   * roots, then the nearer in range whose axial position lies in [0, H].
+   * Lanes that Cone_Intersect would take further take it itself: A == 0 (a
+   * ray along the surface's slope), a discriminant within its rounding of 0
+   * or not >= 0, and, robust, every lane where Cone_NeedsDf looks further
+   * (its first test: C or the discriminant cancelling, or the origin far
+   * along the axis beside its radial distance). */
+#ifdef CR_FAST
+  uint refine = bits & Wide_Bits((A == zero) | ~(disc4 >= zero));
+#else
+  const float8 cScale = oo + rb * rb, dScale = ee + xx, d2 = disc * (Bh * Bh + disc);
+  const float8 dl2 = dl[0] * dl[0] + dl[1] * dl[1] + dl[2] * dl[2];
+  const int8 looks = (cScale > (float8)(8.0f) * fabs(C)) | (dScale * dScale > (float8)(64.0f) * d2) |
+                     (dl2 > (float8)(64.0f) * oo);
+  uint refine = bits & Wide_Bits((A == zero) | ~(disc >= zero) | looks);
 #endif
+  uint found = 0u;
+  float8 t = zero;
+  if (bits != refine) {
+#ifdef CR_FAST
+    const float8 sq = sqrt(disc4), A2 = (float8)(2.0f) * A, mB2 = (float8)(-2.0f) * Bh;
+    const float8 ta = (mB2 - sq) / A2, tb = (mB2 + sq) / A2;
+    const float8 t0 = fmin(ta, tb), t1 = fmax(ta, tb);
+#else
+    const float8 sq = copysign(sqrt(disc), Bh), q = -(Bh + sq);
+    const float8 ra = q / A;
+    const int8 stable = (float8)(16.0f) * q * q >= A * cScale;
+    const float8 rc = select(sq - Bh, C, stable) / select(A, q, stable);
+    const float8 t0 = fmin(ra, rc), t1 = fmax(ra, rc);
+#endif
+    const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
+    const float8 s0 = os + t0 * ds, s1 = os + t1 * ds;
+    const int8 in0 = (t0 >= tmin) & (t0 <= tmax) & (s0 >= zero) & (s0 <= H);
+    const int8 in1 = (t1 >= tmin) & (t1 <= tmax) & (s1 >= zero) & (s1 <= H);
+    found = bits & ~refine & Wide_Bits(in0 | in1);
+    t = select(t1, t0, in0);
+  }
+  return Wide_KeepLanes(pv, ray, CR_PRIM_CONE, found, refine, pk, t, zero, zero, g, hit, anyHit);
+#else
   return Wide_ByScene(pv, g, bits, ray, hit, anyHit);
+#endif
 }
 
 /* `count` packs of type k from `first`. Returns 1 to stop. */
