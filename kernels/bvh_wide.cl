@@ -9,15 +9,15 @@
  * wide in each work-item.
  *
  * Same answers as BVH_Trace: each child's slab test is Box_Slabs lane by lane
- * (the same float operations, no contraction: prelude.h), and a triangle pack
- * only filters: the lanes whose edge functions (Triangle_Intersect's, the
- * same operations) leave the ray's line outside the triangle are dropped,
- * every other lane (and every lane of a triangle with long edges, whose edges
- * Triangle_Intersect may refine) takes Triangle_Intersect on the pack's copy
- * of its triangle with Prim_Intersect's bookkeeping (Wide_Keep); sphere packs
- * the same with Sphere_Intersect's misses; the other types' pieces take
- * Prim_Intersect itself; hits are kept in Hit_Closer's order, so the closest
- * hit does not depend on the visiting order. fp64 and moving scenes walk
+ * (the same float operations, no contraction: prelude.h), and a triangle,
+ * sphere or cone pack runs its type's test in float8, lane by lane the same
+ * float operations as Triangle_Intersect, Sphere_Intersect or
+ * Cone_Intersect, up to where that test would refine (double-float edges,
+ * planes, discriminants or roots): those lanes take the scalar test itself
+ * (Wide_RefineLane), the others are decided in float8; every hit goes
+ * through Prim_Intersect's bookkeeping (Wide_Keep, in lane order). The other
+ * types' pieces take Prim_Intersect itself; hits are kept in Hit_Closer's
+ * order, so the closest hit does not depend on the visiting order. fp64 and moving scenes walk
  * the same layout with the children tested one at a time (double) and no
  * filter (a moving piece meets a shifted ray).
  *
