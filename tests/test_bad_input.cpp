@@ -15,6 +15,7 @@
 
 using namespace cr;
 namespace fs = std::filesystem;
+using cr::test::Slurp;
 
 namespace {
 
@@ -23,29 +24,22 @@ struct Result {
   std::string out, err;
 };
 
-fs::path Dir()
+fs::path BadInputDir()
 {
   return test::ProcessTempDir("cellray_bad");
 }
 
 std::string Write(const std::string& name, const std::string& text)
 {
-  fs::path p = Dir() / name;
+  fs::path p = BadInputDir() / name;
   std::ofstream(p, std::ios::binary) << text;
   return p.string();
 }
 
-std::string Slurp(const fs::path& p)
-{
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 Result Run(const std::string& args)
 {
-  fs::path out = Dir() / "stdout.txt", err = Dir() / "stderr.txt";
+  fs::path out = BadInputDir() / "stdout.txt", err = BadInputDir() / "stderr.txt";
   std::string cmd = std::string(CELLRAY_BINARY) + " " + args + " >" + out.string() + " 2>" + err.string();
   int status = std::system(cmd.c_str());
   Result r;
@@ -60,7 +54,7 @@ std::string Rays()
 {
   static std::string path = [] {
     std::vector<RayRecord> rays = {RayRecord{{0.0f, 0.0f, 10.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY}};
-    std::string p = (Dir() / "one.rays").string();
+    std::string p = (BadInputDir() / "one.rays").string();
     WriteRays(p, rays);
     return p;
   }();
@@ -83,7 +77,7 @@ void ExpectSceneError(const std::string& name, const std::string& text, const st
 TEST_CASE("bad NFF input is rejected with FILE:LINE and exit 2")
 {
   {
-    Result r = Run("trace " + (Dir() / "missing.nff").string() + " --rays " + Rays());
+    Result r = Run("trace " + (BadInputDir() / "missing.nff").string() + " --rays " + Rays());
     CHECK(r.code == 2);
     CHECK(r.err.find("missing.nff: cannot open: no such file") != std::string::npos);
   }
@@ -118,7 +112,7 @@ TEST_CASE("degenerate primitives warn, are skipped, and keep ids stable")
                            "s 5 5 5 0\n"                   // id 2: radius 0
                            "c 0 0 0 1 0 0 0 1\n"           // id 3: base == apex
                            "s 0 0 0 1\n");                 // id 4: the one hit
-  std::string hits = (Dir() / "degenerate.hits").string();
+  std::string hits = (BadInputDir() / "degenerate.hits").string();
   Result r = Run("trace " + path + " --rays " + Rays() + " --backend reference -o " + hits);
   INFO(r.err);
   CHECK(r.code == 0);
@@ -155,7 +149,7 @@ TEST_CASE("bad OBJ and view files are rejected with FILE:LINE")
   // Faces of fewer than 3 vertices warn and keep their ids.
   {
     std::string obj = Write("twoverts.obj", "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2\nf 1 2 3\n");
-    std::string hits = (Dir() / "twoverts.hits").string();
+    std::string hits = (BadInputDir() / "twoverts.hits").string();
     Result r = Run("trace " + obj + " --rays " + Rays() + " --backend reference -o " + hits);
     CHECK(r.code == 0);
     CHECK(r.err.find(":4: face with 2 vertices: skipped, id 0 kept") != std::string::npos);
@@ -167,7 +161,7 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
 {
   std::string scene = Write("ok.nff", "s 0 0 0 1\n");
   {
-    std::string bad = (Dir() / "bad.rays").string();
+    std::string bad = (BadInputDir() / "bad.rays").string();
     {
       std::ofstream out(bad, std::ios::binary);
       std::uint64_t n = 5;
@@ -181,7 +175,7 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
     CHECK(r.err.find("cellray: " + bad + ": count 5 disagrees with the file size") != std::string::npos);
   }
   {
-    std::string hits = (Dir() / "two.hits").string();
+    std::string hits = (BadInputDir() / "two.hits").string();
     WriteHits(hits, {HitRecord{1, 0, 0, 0}, HitRecord{1, 0, 0, 0}});
     Result r = Run("check " + scene + " --rays " + Rays() + " --hits " + hits);
     CHECK(r.code == 2);
@@ -193,18 +187,18 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
     CHECK(r.err.find("cellray: unknown acceleration structure 'kdtree'") == 0);
   }
   {
-    Result r = Run("rays " + scene + " --size 0x5 -o " + (Dir() / "x.rays").string());
+    Result r = Run("rays " + scene + " --size 0x5 -o " + (BadInputDir() / "x.rays").string());
     CHECK(r.code == 2);
     CHECK(r.err.find("--size '0x5'") != std::string::npos);
   }
   for (const char* args : {"--integrator bidir", "--diffuse cube:0", "--diffuse cosine:x", "--diffuse sphere:4",
                            "--integrator path --diffuse cosine:4", "--spp 0", "--spd --integrator path",
                            "--area-lights -1", "--time-limit -2", "--depth 65"}) {
-    Result r = Run("render " + scene + " --size 8x8 --no-progress " + args + " -o " + (Dir() / "r.png").string());
+    Result r = Run("render " + scene + " --size 8x8 --no-progress " + args + " -o " + (BadInputDir() / "r.png").string());
     INFO(args, ": ", r.err);
     CHECK(r.code == 2);
     CHECK(r.err.find("cellray: ") == 0);
-    CHECK_FALSE(fs::exists(Dir() / "r.png"));
+    CHECK_FALSE(fs::exists(BadInputDir() / "r.png"));
   }
   {
     Result r = Run("trace " + scene + " --no-such-option");
@@ -213,7 +207,7 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
   }
   {
     // Output into a missing directory: a runtime failure (exit 1), no file.
-    fs::path out = Dir() / "no-such-dir" / "x.hits";
+    fs::path out = BadInputDir() / "no-such-dir" / "x.hits";
     Result r = Run("trace " + scene + " --rays " + Rays() + " -o " + out.string());
     CHECK(r.code == 1);
     CHECK(r.err.find("cannot write") != std::string::npos);
@@ -224,8 +218,8 @@ TEST_CASE("bad ray and hit files, bad command lines, unwritable output")
 TEST_CASE("render without its image module: a runtime error (exit 1) before the work and no file, while trace never needs it")
 {
   std::string scene = Write("nomodule.nff", "s 0 0 0 1\n");
-  const std::string env = "CELLRAY_IMAGE_MODULE=" + (Dir() / "no-such-module.so").string() + " ";
-  fs::path img = Dir() / "nomodule.png", err = Dir() / "nm_err.txt";
+  const std::string env = "CELLRAY_IMAGE_MODULE=" + (BadInputDir() / "no-such-module.so").string() + " ";
+  fs::path img = BadInputDir() / "nomodule.png", err = BadInputDir() / "nm_err.txt";
   std::string cmd = env + CELLRAY_BINARY + std::string(" render ") + scene + " --size 8x8 --no-progress -o " +
                     img.string() + " >/dev/null 2>" + err.string();
   int status = std::system(cmd.c_str());
@@ -237,7 +231,7 @@ TEST_CASE("render without its image module: a runtime error (exit 1) before the 
   CHECK_FALSE(fs::exists(img));
   // An unsupported format is bad input, told before the module is looked for.
   cmd = env + CELLRAY_BINARY + std::string(" render ") + scene + " --size 8x8 --no-progress -o " +
-        (Dir() / "x.bmp").string() + " >/dev/null 2>" + err.string();
+        (BadInputDir() / "x.bmp").string() + " >/dev/null 2>" + err.string();
   status = std::system(cmd.c_str());
   REQUIRE(WIFEXITED(status));
   CHECK(WEXITSTATUS(status) == 2);
@@ -251,10 +245,10 @@ TEST_CASE("render without its image module: a runtime error (exit 1) before the 
 
 TEST_CASE("generated scenes (gen:KIND:N) load in rays and trace as in bench, and bad names are exit 2")
 {
-  const std::string rays = (Dir() / "gen.rays").string();
+  const std::string rays = (BadInputDir() / "gen.rays").string();
   Result r = Run("rays gen:sphereflake:1 --size 16x16 -o " + rays);
   REQUIRE(r.code == 0);
-  const std::string hits = (Dir() / "gen.hits").string();
+  const std::string hits = (BadInputDir() / "gen.hits").string();
   r = Run("trace gen:sphereflake:1 --rays " + rays + " --backend simd -o " + hits);
   CHECK(r.code == 0);
   CHECK(r.out.find("\"scene\":\"gen:sphereflake:1\"") != std::string::npos);
@@ -273,9 +267,9 @@ TEST_CASE("generated scenes (gen:KIND:N) load in rays and trace as in bench, and
 TEST_CASE("no OpenCL platform: the default backend falls back to simd with one warning line")
 {
   std::string scene = Write("fallback.nff", "s 0 0 0 1\n");
-  fs::create_directories(Dir() / "no-vendors");
-  const std::string env = "OCL_ICD_VENDORS=" + (Dir() / "no-vendors").string() + " ";
-  fs::path out = Dir() / "fb_out.txt", err = Dir() / "fb_err.txt";
+  fs::create_directories(BadInputDir() / "no-vendors");
+  const std::string env = "OCL_ICD_VENDORS=" + (BadInputDir() / "no-vendors").string() + " ";
+  fs::path out = BadInputDir() / "fb_out.txt", err = BadInputDir() / "fb_err.txt";
   std::string cmd = env + CELLRAY_BINARY + std::string(" trace ") + scene + " --rays " + Rays() + " >" + out.string() +
                     " 2>" + err.string();
   int status = std::system(cmd.c_str());

@@ -31,6 +31,7 @@
 
 using namespace cr;
 namespace fs = std::filesystem;
+using cr::test::Slurp;
 
 namespace {
 
@@ -103,13 +104,6 @@ bool SameBytes(const std::vector<HitRecord>& a, const std::vector<HitRecord>& b)
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(HitRecord)) == 0;
 }
 
-std::string Slurp(const fs::path& p)
-{
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 int RunQuiet(const std::string& args)
 {

@@ -12,13 +12,10 @@
 
 using namespace cr;
 namespace fs = std::filesystem;
+using cr::test::TempPath;
 
 namespace {
 
-std::string TempPath(const std::string& name)
-{
-  return (test::ProcessTempDir("cellray_test") / name).string();
-}
 
 void WriteRaw(const std::string& path, const char* magic, std::uint64_t count, const void* payload, std::size_t bytes)
 {

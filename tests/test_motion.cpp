@@ -42,10 +42,7 @@ double TimeCoverage(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& 
   return std::max(0.0, t1 - t0);
 }
 
-std::string TempPath(const std::string& name)
-{
-  return (test::ProcessTempDir("cellray_motion") / name).string();
-}
+std::string MotionTempPath(const std::string& name) { return test::TempPath(name, "cellray_motion"); }
 
 // Many small moving triangles and spheres, each with its own motion, and a
 // static ground: leaves and cells hold pieces of mixed motions.
@@ -214,7 +211,7 @@ TEST_CASE("motion: swept bounds, NFF errors, CRRAYS02 round trip and rejections"
 
   const std::vector<RayRecord> rays = {RayRecord{{0, 0, 0}, 0, {0, 0, 1}, INFINITY},
                                        RayRecord{{1, 2, 3}, 0.5f, {0, 1, 0}, 9}};
-  const std::string p = TempPath("timed.rays");
+  const std::string p = MotionTempPath("timed.rays");
   WriteRays(p, rays, {0.25f, 1.0f});
   CHECK(FileSize(p) == 16 + 36 * 2);
   CHECK(std::string(ReadFile(p).data(), 8) == "CRRAYS02");
@@ -226,7 +223,7 @@ TEST_CASE("motion: swept bounds, NFF errors, CRRAYS02 round trip and rejections"
   // A reader that takes no times refuses a file whose times matter.
   CHECK_THROWS_AS(ReadRays(p), InputError);
   // CRRAYS01 still reads, with no times (time 0).
-  const std::string p1 = TempPath("plain.rays");
+  const std::string p1 = MotionTempPath("plain.rays");
   WriteRays(p1, rays);
   CHECK(ReadRays(p1, &times).size() == 2u);
   CHECK(times.empty());

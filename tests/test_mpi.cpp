@@ -23,7 +23,7 @@ namespace {
 
 bool HaveMpirun() { return std::system("command -v mpirun >/dev/null 2>&1") == 0; }
 
-fs::path Dir()
+fs::path MpiDir()
 {
   return test::ProcessTempDir("cellray_mpi");
 }
@@ -57,7 +57,7 @@ TEST_CASE("mpi: render with 2 ranks in tiles, bands and bands-data is bit-identi
     MESSAGE("mpirun not found: skipped");
     return;
   }
-  const fs::path d = Dir();
+  const fs::path d = MpiDir();
   struct Case {
     const char* scene;
     const char* args;
@@ -86,7 +86,7 @@ TEST_CASE("mpi: render with 2 ranks in tiles, bands and bands-data is bit-identi
 TEST_CASE("mpi: bands-data with 4 ranks passes rays between bands and gives the single process's image")
 {
   if (!HaveMpirun()) return;
-  const fs::path d = Dir();
+  const fs::path d = MpiDir();
   struct Case {
     const char* scene;
     const char* args;
@@ -125,7 +125,7 @@ TEST_CASE("mpi: bands-data with 4 ranks passes rays between bands and gives the 
 TEST_CASE("mpi: trace with 2 ranks writes the single process's hits in input order")
 {
   if (!HaveMpirun()) return;
-  const fs::path d = Dir();
+  const fs::path d = MpiDir();
   const fs::path rays = d / "m.rays", one = d / "one.hits", two = d / "two.hits";
   REQUIRE(Run(0, fmt::format("rays scenes/distributed/motion.nff --kind diffuse --count 3001 -o {}", rays.string()),
               d / "r.log") == 0);
@@ -139,7 +139,7 @@ TEST_CASE("mpi: trace with 2 ranks writes the single process's hits in input ord
 TEST_CASE("mpi: a bad argument ends every rank with exit 2 and writes nothing")
 {
   if (!HaveMpirun()) return;
-  const fs::path d = Dir();
+  const fs::path d = MpiDir();
   const fs::path out = d / "never.exr";
   const int rc = Run(2, fmt::format("render scenes/spd/balls.nff --spp 0 -o {}", out.string()), d / "bad.log");
   const auto log = ReadFile((d / "bad.log").string());

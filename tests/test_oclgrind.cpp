@@ -50,10 +50,11 @@
 
 using namespace cr;
 namespace fs = std::filesystem;
+using cr::test::BuildDir;
+using cr::test::Slurp;
 
 namespace {
 
-fs::path BuildDir() { return fs::path(CELLRAY_BINARY).parent_path().parent_path(); }
 
 // The oclgrind wrapper on $PATH, empty when it is not installed.
 std::string OclgrindPath()
@@ -91,16 +92,9 @@ bool NoOclgrind()
   return none;
 }
 
-std::string Slurp(const fs::path& p)
-{
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // This process's scratch directory, removed when the process ends.
-fs::path Dir()
+fs::path OclgrindDir()
 {
   static const struct Scratch {
     fs::path dir = BuildDir() / "test-cache" / fmt::format("oclgrind-{}", ::getpid());
@@ -190,7 +184,7 @@ std::string SceneText(const TypeSet& ts)
   return s;
 }
 
-// A type set's scene and its rays (files under Dir()): 16 primary rays (a
+// A type set's scene and its rays (files under OclgrindDir()): 16 primary rays (a
 // 4x4 image), 8 random rays with origins inside the scene box, and the shadow
 // rays of the primary hits, in that order; with 4x4 packets the last packet
 // has dead lanes.
@@ -204,7 +198,7 @@ const Fixture& GetFixture(const TypeSet& ts)
   static std::map<std::string, Fixture> cache;
   Fixture& f = cache[ts.name];
   if (!f.scene.empty()) return f;
-  f.scene = (Dir() / fmt::format("{}.nff", ts.name)).string();
+  f.scene = (OclgrindDir() / fmt::format("{}.nff", ts.name)).string();
   std::ofstream(f.scene) << SceneText(ts);
   const Scene& scene = test::CachedScene(f.scene);
   const auto& ref = test::CachedReference(scene);
@@ -217,7 +211,7 @@ const Fixture& GetFixture(const TypeSet& ts)
   g.kind = RayKind::Shadow;
   g.count = 0;
   for (const auto& r : GenerateRays(scene, ref, g)) f.records.push_back(r);
-  f.rays = (Dir() / fmt::format("{}.rays", ts.name)).string();
+  f.rays = (OclgrindDir() / fmt::format("{}.rays", ts.name)).string();
   WriteRays(f.rays, f.records);
   return f;
 }
@@ -233,7 +227,7 @@ struct Outcome {
 Outcome RunUnderOclgrind(const std::string& args, const std::string& tag, bool optimised = false,
                          const fs::path& cacheDir = BuildDir() / "test-cache" / "oclgrind", const std::string& env = "")
 {
-  const fs::path log = Dir() / (tag + ".log"), out = Dir() / (tag + ".out"), err = Dir() / (tag + ".err");
+  const fs::path log = OclgrindDir() / (tag + ".log"), out = OclgrindDir() / (tag + ".out"), err = OclgrindDir() / (tag + ".err");
   const std::string cmd = fmt::format(
       "env -u CELLRAY_DEVICE -u CELLRAY_CL_FAULT -u CELLRAY_CL_COLD {}CELLRAY_CACHE_DIR={} {} --log {} {}--data-races "
       "--uninitialized --check-api {} {} > {} 2> {}",
@@ -347,7 +341,7 @@ void Sweep(Precision precision, const char* variant, bool coldInline = false, co
         const std::string tag = fmt::format("{}-{}-{}-{}-{}{}{}", ts.name, AccelKindName(accel), variant,
                                             occlusion ? "o" : "c", PrecisionName(precision),
                                             coldInline ? "-inline" : "", octreeArgs ? "-margin" : "");
-        const std::string hitsPath = (Dir() / (tag + ".hits")).string();
+        const std::string hitsPath = (OclgrindDir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(
             fmt::format("trace {} --rays {} --backend opencl --accel {} --variant {}:4x4 --precision {}{}{}{} -o {}",
                         f.scene, f.rays, AccelKindName(accel), variant, PrecisionName(precision),
@@ -462,7 +456,7 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
       {
         const Precision precision = precisions[pair++ % 3];
         const std::string tag = fmt::format("cam-{}-{}-{}", AccelKindName(accel), variant, PrecisionName(precision));
-        const std::string hitsPath = (Dir() / (tag + ".hits")).string();
+        const std::string hitsPath = (OclgrindDir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(
             fmt::format("trace {} --primary {}x{} --stats --backend opencl --accel {} --variant {}:4x4 --precision {} "
                         "-o {}",
@@ -482,7 +476,7 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
       // The generic programs (every type and structure, chosen by arguments).
       for (bool occlusion : {false, true}) {
         const std::string tag = fmt::format("gen-{}-{}-{}", AccelKindName(accel), variant, occlusion ? "o" : "c");
-        const std::string hitsPath = (Dir() / (tag + ".hits")).string();
+        const std::string hitsPath = (OclgrindDir() / (tag + ".hits")).string();
         const Outcome o = RunUnderOclgrind(fmt::format("trace {} --rays {} --backend opencl --accel {} --variant "
                                                        "{}-generic:4x4{} -o {}",
                                                        f.scene, f.rays, AccelKindName(accel), variant,
@@ -500,7 +494,7 @@ TEST_CASE("oclgrind: camera kernels with counters, generic programs, unified hit
       // The renderer: unified hit records, closest and shadow queries; the
       // image must equal the scalar backend's pixel for pixel.
       const std::string tag = fmt::format("render-{}-{}", AccelKindName(accel), variant);
-      const std::string image = (Dir() / (tag + ".exr")).string(), refImage = (Dir() / (tag + "-ref.exr")).string();
+      const std::string image = (OclgrindDir() / (tag + ".exr")).string(), refImage = (OclgrindDir() / (tag + "-ref.exr")).string();
       const Outcome o = RunUnderOclgrind(fmt::format("render {} --size 6x4 --no-progress --backend opencl --accel {} "
                                                      "--variant {}:4x4 -o {}",
                                                      f.scene, AccelKindName(accel), variant, image),
@@ -528,7 +522,7 @@ TEST_CASE("oclgrind: a program it cannot run fails by name and is not cached" * 
   // which Oclgrind 21.10 does not know: the program builds, its kernel
   // cannot be created. Before the fix the program was stored in the cache
   // at the build, so every later run loaded it and failed the same way.
-  const fs::path cacheDir = Dir() / "cache";
+  const fs::path cacheDir = OclgrindDir() / "cache";
   const Fixture& f = GetFixture(kTypeSets[0]);
   const Outcome o = RunUnderOclgrind(
       fmt::format("trace {} --rays {} --backend opencl --variant packet:4x4", f.scene, f.rays), "optimised", true,
@@ -560,14 +554,14 @@ TEST_CASE("oclgrind: a registered Oclgrind ICD changes no default choice" * doct
     MESSAGE("no ", icd.string(), " or ", vendors.string(), ": nothing to register");
     return;
   }
-  const fs::path dir = Dir() / "vendors";
+  const fs::path dir = OclgrindDir() / "vendors";
   fs::create_directories(dir);
   for (const auto& e : fs::directory_iterator(vendors))
     if (e.path().extension() == ".icd") fs::copy_file(e.path(), dir / e.path().filename());
   std::ofstream(dir / "0-oclgrind.icd") << icd.string() << "\n";
   const Fixture& f = GetFixture(kEveryType);
   auto run = [&](const std::string& args) {
-    const fs::path out = Dir() / "icd.out", err = Dir() / "icd.err";
+    const fs::path out = OclgrindDir() / "icd.out", err = OclgrindDir() / "icd.err";
     const std::string cmd =
         fmt::format("env -u CELLRAY_DEVICE OCL_ICD_VENDORS={} CELLRAY_CACHE_DIR={} {} {} > {} 2> {}", dir.string(),
                     (BuildDir() / "test-cache" / "opencl").string(), CELLRAY_BINARY, args, out.string(), err.string());

@@ -55,9 +55,9 @@ bool NoOpenCL()
 }
 
 namespace fs = std::filesystem;
+using cr::test::BuildDir;
 
 // The build tree (the cellray binary is in <build>/bin).
-fs::path BuildDir() { return fs::path(CELLRAY_BINARY).parent_path().parent_path(); }
 
 using test::ScopedEnv;
 
@@ -174,7 +174,7 @@ std::vector<fs::path> CacheFiles(const fs::path& dir)
   return out;
 }
 
-std::vector<char> Slurp(const fs::path& p)
+std::vector<char> SlurpBytes(const fs::path& p)
 {
   std::ifstream in(p, std::ios::binary);
   return std::vector<char>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -224,7 +224,7 @@ TEST_CASE("opencl: program cache entries are checked before use (no device neede
   CHECK(other.file != key.file);
   CHECK_FALSE(LoadClCache(other).binary);
 
-  const std::vector<char> good = Slurp(key.file);
+  const std::vector<char> good = SlurpBytes(key.file);
   SUBCASE("truncated payload")
   {
     Spit(key.file, std::vector<char>(good.begin(), good.end() - 10));
@@ -584,12 +584,12 @@ TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * do
   auto files = CacheFiles(dir);
   REQUIRE(files.size() == 1);
   CHECK(run(nullptr) == "hit");
-  const std::vector<char> good = Slurp(files[0]);
+  const std::vector<char> good = SlurpBytes(files[0]);
 
   Spit(files[0], std::vector<char>(good.begin(), good.begin() + good.size() / 2));
   CHECK(run(&note) == "miss");
   CHECK(note.find("truncated") != std::string::npos);
-  CHECK(Slurp(files[0]).size() > kClCacheHeaderBytes);  // replaced by a fresh entry...
+  CHECK(SlurpBytes(files[0]).size() > kClCacheHeaderBytes);  // replaced by a fresh entry...
   CHECK(run(nullptr) == "hit");  // ...that is trusted
 
   auto flipped = good;
@@ -624,7 +624,7 @@ CliRun RunCellray(const std::string& envs, const std::string& args, const fs::pa
   CliRun r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   const auto slurp = [](const fs::path& p) {
-    const std::vector<char> v = Slurp(p);
+    const std::vector<char> v = SlurpBytes(p);
     return std::string(v.begin(), v.end());
   };
   r.out = slurp(out);
@@ -674,7 +674,7 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
     const CliRun r = RunCellray("", fmt::format("{} --backend simd -o {}", trace, simdHits.string()), dir);
     REQUIRE(r.code == 0);
   }
-  const std::vector<char> expected = Slurp(simdHits);
+  const std::vector<char> expected = SlurpBytes(simdHits);
   for (const FaultCase& fc : kFaults) {
     const std::string env = fmt::format("CELLRAY_CL_FAULT={} CELLRAY_CACHE_DIR={}", fc.fault, cache.string());
     const fs::path hits = dir / fmt::format("{}.hits", fc.fault);
@@ -709,7 +709,7 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
       CHECK(j["backend"] == "simd");
       CHECK(j["fallback_from"] == "opencl");
       CHECK(j["fallback_reason"].get<std::string>().find(fc.error) != std::string::npos);
-      CHECK(Slurp(hits) == expected);  // the simd backend's answers, bit for bit
+      CHECK(SlurpBytes(hits) == expected);  // the simd backend's answers, bit for bit
     }
   }
   // No program of a failing build (or of one whose kernels could not be
@@ -740,7 +740,7 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
     REQUIRE(lines.size() == 1);
     CHECK(lines[0].find("CL_DEVICE_NOT_FOUND") != std::string::npos);
     CHECK(lines[0].find("falling back to the simd backend") != std::string::npos);
-    CHECK(Slurp(hits) == expected);
+    CHECK(SlurpBytes(hits) == expected);
   }
   for (const char* backend : {"opencl", "auto"}) {
     const CliRun r = RunCellray("", fmt::format("{} --backend {} --device 0:x", trace, backend), dir);
@@ -771,7 +771,7 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
                                 fmt::format("{} --backend opencl -o {}", trace, hits.string()), dir);
     INFO("stderr: ", r.err);
     CHECK(r.code == 0);
-    CHECK(Slurp(hits) == expected);
+    CHECK(SlurpBytes(hits) == expected);
   }
   // CELLRAY_CL_TYPES=all: a program with every primitive type, the same
   // answers; any value but scene or all is bad input by name.
@@ -781,7 +781,7 @@ TEST_CASE("opencl: every injected fault is a named error (exit 1) with --backend
                                 fmt::format("{} --backend opencl -o {}", trace, hits.string()), dir);
     INFO("stderr: ", r.err);
     CHECK(r.code == 0);
-    CHECK(Slurp(hits) == expected);
+    CHECK(SlurpBytes(hits) == expected);
     const std::string options = nlohmann::json::parse(r.out)["build_options"];
 #define CR_HAS_ALL_(T, U, a) CHECK(options.find("-DCR_HAS_" #U "=1") != std::string::npos);
     CR_PRIM_TYPES(CR_HAS_ALL_)

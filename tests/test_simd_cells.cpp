@@ -45,9 +45,9 @@ const CellStructure kCellAccels[] = {{AccelKind::Grid, {}, "grid"},
                                      {AccelKind::Octree, OctreeRayMargin("centre"), "octree margin=ray"},
                                      {AccelKind::Octree, OctreeRayMargin("offset"), "octree margin=ray root=offset"},
                                      {AccelKind::HGrid, {}, "hgrid"}};
-const char* const kVariants[] = {"packet", "single"};
+const char* const kCellVariants[] = {"packet", "single"};
 
-std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
+std::vector<std::string> CellIsas() { return simd::SupportedVectorIsas(); }
 
 // Random rays inside the structure's box whose origin coordinates are moved,
 // with probability 0.6 each, exactly onto a cell plane (plane(a, u) gives
@@ -164,7 +164,7 @@ std::size_t CountSame(const std::vector<HitRecord>& a, const std::vector<HitReco
 
 TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions, bit for bit the scalar backend")
 {
-  const auto isas = AvailableIsas();
+  const auto isas = CellIsas();
   if (isas.empty()) {
     MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2");
     return;
@@ -185,7 +185,7 @@ TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions,
           for (const HitRecord& h : scalarHits) nHits += h.prim != CR_NO_HIT;
           CHECK(nHits > rays.size() / 20);  // the set meets the geometry
           for (const std::string& isa : isas)
-            for (const char* variant : kVariants) {
+            for (const char* variant : kCellVariants) {
               TraceConfig cfg = scalarCfg;
               cfg.backend = Backend::Simd;
               cfg.isa = isa;
@@ -207,7 +207,7 @@ TEST_CASE("simd grid, octree and hgrid: rays on cell planes with +-0 directions,
 
 TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar backend's")
 {
-  const auto isas = AvailableIsas();
+  const auto isas = CellIsas();
   if (isas.empty()) return;
   for (const std::string& name : test::Scenes({"tree", "gears"})) {
     const Scene& scene = test::CachedScene(test::SpdPath(name));
@@ -225,7 +225,7 @@ TEST_CASE("simd grid, octree and hgrid: per-ray statistics equal the scalar back
         REQUIRE(want.nTS > 0);
         REQUIRE(want.nIT > 0);
         for (const std::string& isa : isas)
-          for (const char* variant : kVariants) {
+          for (const char* variant : kCellVariants) {
             TraceConfig cfg = scalarCfg;
             cfg.backend = Backend::Simd;
             cfg.isa = isa;
@@ -295,7 +295,7 @@ TEST_CASE("simd bvh packets: frustums on the nodes' box planes, reciprocals near
   // mode 0 wrong against the reference. (Before
   // host/trace/direction_scale.h, the rays whose whole direction was ~1e-30
   // made every backend wrong on balls and tree: d.d underflowed.)
-  const auto isas = AvailableIsas();
+  const auto isas = CellIsas();
   if (isas.empty()) {
     MESSAGE("SKIPPED: this CPU has neither SSE4.1 nor AVX2");
     return;

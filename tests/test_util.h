@@ -6,10 +6,12 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -57,13 +59,13 @@ class ScopedEnv {
 };
 
 // The build tree (the cellray binary is in <build>/bin).
-inline std::string BuildDir() { return std::filesystem::path(CELLRAY_BINARY).parent_path().parent_path().string(); }
+inline std::filesystem::path BuildDir() { return std::filesystem::path(CELLRAY_BINARY).parent_path().parent_path(); }
 
 // OpenCL programs built by the tests persist under the build tree
 // (test-cache/opencl), so only the first run pays for the compiler.
 inline ScopedEnv OpenCLTestCacheDir()
 {
-  return ScopedEnv("CELLRAY_CACHE_DIR", BuildDir() + "/test-cache/opencl");
+  return ScopedEnv("CELLRAY_CACHE_DIR", (BuildDir() / "test-cache" / "opencl").string());
 }
 
 // The scenes a loop over SPD scenes visits: `defaults`, unless the
@@ -117,6 +119,21 @@ inline std::filesystem::path ProcessTempDir(const std::string& prefix)
     std::filesystem::create_directories(d);
   }
   return d;
+}
+
+// A file's bytes (empty when it cannot be read).
+inline std::string Slurp(const std::filesystem::path& p)
+{
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// A file in this process's scratch folder `prefix` (ProcessTempDir).
+inline std::string TempPath(const std::string& name, const std::string& prefix = "cellray_test")
+{
+  return (ProcessTempDir(prefix) / name).string();
 }
 
 inline std::string SourcePath(const std::string& rel) { return std::string(CELLRAY_SOURCE_DIR) + "/" + rel; }
