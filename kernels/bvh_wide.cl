@@ -159,6 +159,20 @@ __attribute__((always_inline)) CR_FUNC int Wide_KeepLanes(const PrimView* pv, co
   return 0;
 }
 
+#if CR_WIDE_VECTOR && !defined(CR_FAST)
+/* Triangle_Norm1 of each vertex of a pack translated to the ray origin, in
+ * the ray's axis order (the scale of its sheared coordinates' rounding):
+ * v the pack's [vertex][axis][lane] floats, Az..Cz the translated kz
+ * components. */
+CR_FUNC void Wide_TriangleNorms(CR_GLOBAL const float* v, int kx, int ky, float8 ox, float8 oy, float8 Az, float8 Bz,
+                                float8 Cz, float8* nA, float8* nB, float8* nC)
+{
+  *nA = (fabs(vload8(0, v + kx * 8) - ox) + fabs(vload8(0, v + ky * 8) - oy)) + fabs(Az);
+  *nB = (fabs(vload8(0, v + (3 + kx) * 8) - ox) + fabs(vload8(0, v + (3 + ky) * 8) - oy)) + fabs(Bz);
+  *nC = (fabs(vload8(0, v + (6 + kx) * 8) - ox) + fabs(vload8(0, v + (6 + ky) * 8) - oy)) + fabs(Cz);
+}
+#endif
+
 /* A triangle pack: the lanes that may hit take Prim_Intersect. Returns 1 to
  * stop (an occlusion query has its occluder). */
 CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, const Ray* ray, Hit* hit, int anyHit,
@@ -218,9 +232,8 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   const uint8 flags = vload8(0, pk + 80);
   const uint8 none = (uint8)(0u);
   if (Wide_Bits((flags & (uint8)(CR_TRI_LONG_EDGES)) != none) & bits & ~keep) {
-    const float8 nA = (fabs(vload8(0, v + kx * 8) - ox) + fabs(vload8(0, v + ky * 8) - oy)) + fabs(Az);
-    const float8 nB = (fabs(vload8(0, v + (3 + kx) * 8) - ox) + fabs(vload8(0, v + (3 + ky) * 8) - oy)) + fabs(Bz);
-    const float8 nC = (fabs(vload8(0, v + (6 + kx) * 8) - ox) + fabs(vload8(0, v + (6 + ky) * 8) - oy)) + fabs(Cz);
+    float8 nA, nB, nC;
+    Wide_TriangleNorms(v, kx, ky, ox, oy, Az, Bz, Cz, &nA, &nB, &nC);
     const float8 k = (float8)(0x1.0p-18f);
     const int8 undecided = (((flags & (uint8)(CR_TRI_LONG_U)) != none) & (fabs(U) <= k * (nB * nC))) |
                            (((flags & (uint8)(CR_TRI_LONG_V)) != none) & (fabs(V) <= k * (nC * nA))) |
@@ -260,9 +273,8 @@ CR_FUNC int Wide_TrianglePack(const PrimView* pv, CR_GLOBAL const uint* pk, cons
   const float8 tmin = (float8)(ray->tmin), tmax = (float8)(hit->t);
   const float8 an = fabs(nd), tn = t * an, slack = (float8)(0.25f) * fabs(tn) + (float8)(0x1.0p-20f) * sum;
   const int8 nearPlane = (sum > (float8)(16.0f) * fabs(np)) & (tn + slack >= tmin * an) & (tn - slack <= tmax * an);
-  const float8 nA = (fabs(vload8(0, v + kx * 8) - ox) + fabs(vload8(0, v + ky * 8) - oy)) + fabs(Az);
-  const float8 nB = (fabs(vload8(0, v + (3 + kx) * 8) - ox) + fabs(vload8(0, v + (3 + ky) * 8) - oy)) + fabs(Bz);
-  const float8 nC = (fabs(vload8(0, v + (6 + kx) * 8) - ox) + fabs(vload8(0, v + (6 + ky) * 8) - oy)) + fabs(Cz);
+  float8 nA, nB, nC;
+  Wide_TriangleNorms(v, kx, ky, ox, oy, Az, Bz, Cz, &nA, &nB, &nC);
   const float8 k19 = (float8)(0x1.0p-19f);
   const int8 degenerate = (fabs(U) <= k19 * (nB * nC)) & (fabs(V) <= k19 * (nC * nA)) & (fabs(W) <= k19 * (nA * nB));
   const int8 inRange = (t >= tmin) & (t <= tmax) & (nd != zero);

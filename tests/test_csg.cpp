@@ -25,7 +25,7 @@ const char* kBite =
     "csg difference\n  box -1 -1 -1 1 1 1\n  f 1 0 0 1 0 0 0 1\n  s 1 0 0 0.5\ncsg end\n"
     "s 0 0 -9 1\n";
 
-std::vector<HitRecord> Trace(const Scene& s, const std::vector<RayRecord>& rays, Backend b, Precision p,
+std::vector<HitRecord> TraceCsg(const Scene& s, const std::vector<RayRecord>& rays, Backend b, Precision p,
                              bool occlusion = false, bool unified = false)
 {
   TraceConfig cfg;
@@ -69,7 +69,7 @@ TEST_CASE("csg statement (extension): one id per leaf in file order, one record 
   for (Backend b : CpuBackends())
     for (Precision p : {Precision::Robust, Precision::Fp64, Precision::Fast}) {
       INFO(BackendName(b), " ", PrecisionName(p));
-      const auto h = Trace(s, rays, b, p);
+      const auto h = TraceCsg(s, rays, b, p);
       CHECK(h[0].prim == 1);
       CHECK(h[0].t == doctest::Approx(4.0));
       CHECK(h[1].prim == 2);
@@ -81,7 +81,7 @@ TEST_CASE("csg statement (extension): one id per leaf in file order, one record 
       CHECK(h[3].t == doctest::Approx(0.5));
       // The renderer's form names the piece and carries the leaf and its
       // side; the surface's normal points out of the solid (+x at the bite).
-      const auto u = Trace(s, rays, b, p, false, true);
+      const auto u = TraceCsg(s, rays, b, p, false, true);
       REQUIRE(u[1].prim == s.Ranges().begin[CR_PRIM_CSG]);
       CHECK(u[1].u == 1.0f);
       CHECK(u[1].v == 1.0f);
@@ -90,7 +90,7 @@ TEST_CASE("csg statement (extension): one id per leaf in file order, one record 
       CHECK(sp.ng.x == doctest::Approx(1.0));
       CHECK(u[0].v == 0.0f);
       // Occlusion names the leaf of the first crossing.
-      const auto o = Trace(s, rays, b, p, true);
+      const auto o = TraceCsg(s, rays, b, p, true);
       CHECK(o[1].prim == 2);
       CHECK(o[1].t == 0.0f);
     }
@@ -153,7 +153,7 @@ TEST_CASE("csg: coincident faces, nesting and every operand kind on closed forms
   for (Backend b : CpuBackends())
     for (Precision p : {Precision::Robust, Precision::Fp64}) {
       INFO(BackendName(b), " ", PrecisionName(p));
-      const auto h = Trace(s, rays, b, p);
+      const auto h = TraceCsg(s, rays, b, p);
       CHECK(h[0].prim == 0);
       CHECK(h[0].t == 1.0f);
       CHECK(h[1].prim == 1);

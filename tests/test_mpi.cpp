@@ -29,7 +29,7 @@ fs::path MpiDir()
 }
 
 // Runs cellray with `args` (under mpirun -np n when n > 0); returns the exit code.
-int Run(int n, const std::string& args, const fs::path& log)
+int RunMpi(int n, const std::string& args, const fs::path& log)
 {
   std::string launcher;
   if (n > 0) {
@@ -44,7 +44,7 @@ int Run(int n, const std::string& args, const fs::path& log)
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-bool SameBytes(const fs::path& a, const fs::path& b)
+bool SameFileBytes(const fs::path& a, const fs::path& b)
 {
   return fs::exists(a) && fs::exists(b) && ReadFile(a.string()) == ReadFile(b.string());
 }
@@ -68,16 +68,16 @@ TEST_CASE("mpi: render with 2 ranks in tiles, bands and bands-data is bit-identi
                         {"scenes/distributed/motion.nff", "--integrator path --spp 2 --size 40x24 --backend scalar"}};
   for (const Case& c : cases) {
     const fs::path one = d / "one.exr";
-    REQUIRE(Run(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one.log") == 0);
+    REQUIRE(RunMpi(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one.log") == 0);
     for (const char* mode : {"tiles", "bands", "bands-data"}) {
       const fs::path two = d / fmt::format("two_{}.exr", mode);
-      const int rc = Run(2, fmt::format("render {} {} --distribute {} --tile-rows 3 -o {}", c.scene, c.args, mode, two.string()),
+      const int rc = RunMpi(2, fmt::format("render {} {} --distribute {} --tile-rows 3 -o {}", c.scene, c.args, mode, two.string()),
                          d / "two.log");
       const auto log = ReadFile((d / "two.log").string());
       const std::string text(log.begin(), log.end());
       INFO(std::string(c.scene), " ", std::string(mode), ": ", text);
       CHECK(rc == 0);
-      CHECK(SameBytes(one, two));
+      CHECK(SameFileBytes(one, two));
       CHECK(text.find("\"ranks\":2") != std::string::npos);
     }
   }
@@ -99,14 +99,14 @@ TEST_CASE("mpi: bands-data with 4 ranks passes rays between bands and gives the 
                         {"scenes/distributed/motion.nff", "--integrator path --spp 2 --size 48x32 --backend simd --accel grid"}};
   for (const Case& c : cases) {
     const fs::path one = d / "one4.exr", four = d / "four.exr", json = d / "four.json";
-    REQUIRE(Run(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one4.log") == 0);
-    const int rc = Run(4, fmt::format("render {} {} --distribute bands-data -o {} --stats {}", c.scene, c.args,
+    REQUIRE(RunMpi(0, fmt::format("render {} {} --no-progress -o {}", c.scene, c.args, one.string()), d / "one4.log") == 0);
+    const int rc = RunMpi(4, fmt::format("render {} {} --distribute bands-data -o {} --stats {}", c.scene, c.args,
                                       four.string(), json.string()),
                        d / "four.log");
     const auto log = ReadFile((d / "four.log").string());
     INFO(std::string(c.scene), ": ", std::string(log.begin(), log.end()));
     CHECK(rc == 0);
-    CHECK(SameBytes(one, four));
+    CHECK(SameFileBytes(one, four));
     // Every rank holds part of the scene; rays crossed bands.
     const auto js = ReadFile(json.string());
     const nlohmann::json j = nlohmann::json::parse(std::string(js.begin(), js.end()));
@@ -127,13 +127,13 @@ TEST_CASE("mpi: trace with 2 ranks writes the single process's hits in input ord
   if (!HaveMpirun()) return;
   const fs::path d = MpiDir();
   const fs::path rays = d / "m.rays", one = d / "one.hits", two = d / "two.hits";
-  REQUIRE(Run(0, fmt::format("rays scenes/distributed/motion.nff --kind diffuse --count 3001 -o {}", rays.string()),
+  REQUIRE(RunMpi(0, fmt::format("rays scenes/distributed/motion.nff --kind diffuse --count 3001 -o {}", rays.string()),
               d / "r.log") == 0);
-  REQUIRE(Run(0, fmt::format("trace scenes/distributed/motion.nff --rays {} --backend simd -o {}", rays.string(), one.string()),
+  REQUIRE(RunMpi(0, fmt::format("trace scenes/distributed/motion.nff --rays {} --backend simd -o {}", rays.string(), one.string()),
               d / "t1.log") == 0);
-  CHECK(Run(2, fmt::format("trace scenes/distributed/motion.nff --rays {} --backend simd -o {}", rays.string(), two.string()),
+  CHECK(RunMpi(2, fmt::format("trace scenes/distributed/motion.nff --rays {} --backend simd -o {}", rays.string(), two.string()),
             d / "t2.log") == 0);
-  CHECK(SameBytes(one, two));
+  CHECK(SameFileBytes(one, two));
 }
 
 TEST_CASE("mpi: a bad argument ends every rank with exit 2 and writes nothing")
@@ -141,7 +141,7 @@ TEST_CASE("mpi: a bad argument ends every rank with exit 2 and writes nothing")
   if (!HaveMpirun()) return;
   const fs::path d = MpiDir();
   const fs::path out = d / "never.exr";
-  const int rc = Run(2, fmt::format("render scenes/spd/balls.nff --spp 0 -o {}", out.string()), d / "bad.log");
+  const int rc = RunMpi(2, fmt::format("render scenes/spd/balls.nff --spp 0 -o {}", out.string()), d / "bad.log");
   const auto log = ReadFile((d / "bad.log").string());
   const std::string text(log.begin(), log.end());
   INFO(text);

@@ -56,6 +56,8 @@ bool NoOpenCL()
 
 namespace fs = std::filesystem;
 using cr::test::BuildDir;
+using cr::test::kKinds;
+using cr::test::UlpDistance;
 
 // The build tree (the cellray binary is in <build>/bin).
 
@@ -73,17 +75,7 @@ std::vector<RayRecord> HostCameraRays(const Scene& scene, int w, int h)
   return GenerateRays(scene, test::CachedReference(scene), g);
 }
 
-std::int64_t UlpDistance(float a, float b)
-{
-  std::int32_t ia, ib;
-  std::memcpy(&ia, &a, 4);
-  std::memcpy(&ib, &b, 4);
-  if (ia < 0) ia = std::int32_t(0x80000000u - std::uint32_t(ia));
-  if (ib < 0) ib = std::int32_t(0x80000000u - std::uint32_t(ib));
-  return std::llabs(std::int64_t(ia) - std::int64_t(ib));
-}
-
-struct Comparison {
+struct ClComparison {
   std::size_t differ = 0;        // different answer, not explained
   std::size_t exactTies = 0;     // different primitive at exactly the same t
   std::size_t otherOccluder = 0; // occlusion: occluded by another primitive (any hit is right)
@@ -92,9 +84,9 @@ struct Comparison {
 
 // Compares OpenCL hits with the scalar backend's: same primitive, t within
 // 2 ulp, same u, v within 2 ulp; for occlusion the same verdict.
-Comparison Compare(const std::vector<HitRecord>& cl, const std::vector<HitRecord>& sc, bool occlusion)
+ClComparison CompareCl(const std::vector<HitRecord>& cl, const std::vector<HitRecord>& sc, bool occlusion)
 {
-  Comparison c;
+  ClComparison c;
   REQUIRE(cl.size() == sc.size());
   for (std::size_t i = 0; i < cl.size(); ++i) {
     const HitRecord& a = cl[i];
@@ -116,14 +108,13 @@ Comparison Compare(const std::vector<HitRecord>& cl, const std::vector<HitRecord
   return c;
 }
 
-const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 constexpr int kRaySize = 24;  // 576 rays per scene and kind
 
 // Every SPD scene x ray kind with `accel`, for the ray and packet variants
 // (and the BVH's stackless, wide and wide-packet walks; the wide walks' binary BVH is
 // built with the SIMD backend's parameters, BackendAccelParams, and so is
 // the scalar side it is compared with).
-void RunConformance(AccelKind accel)
+void RunClConformance(AccelKind accel)
 {
   auto cache = TestCacheDir();
   std::size_t ties = 0, otherOccluders = 0;
@@ -148,7 +139,7 @@ void RunConformance(AccelKind accel)
         std::vector<HitRecord> hits, ref;
         tracer->Trace(rays, hits, occlusion, nullptr);
         scalar->Trace(rays, ref, occlusion, nullptr);
-        const Comparison c = Compare(hits, ref, occlusion);
+        const ClComparison c = CompareCl(hits, ref, occlusion);
         const ref::CheckResult r = ref::CheckHits(test::CachedReference(scene), rays, hits, occlusion);
         INFO(name, " ", std::string(RayKindName(kind)), " ", std::string(AccelKindName(accel)), " opencl ", variant, ": ", c.differ,
              " differ from scalar (", c.firstDiffer, "), ", r.wrong, " wrong of ", r.rays);
@@ -332,25 +323,25 @@ TEST_CASE("opencl: device choice" * doctest::skip(NoOpenCL()))
 TEST_CASE("opencl: conformance, bvh, ray, packet, stackless, wide and wide-packet variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
-  RunConformance(AccelKind::BVH);
+  RunClConformance(AccelKind::BVH);
 }
 
 TEST_CASE("opencl: conformance, grid, ray and packet variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
-  RunConformance(AccelKind::Grid);
+  RunClConformance(AccelKind::Grid);
 }
 
 TEST_CASE("opencl: conformance, octree, ray and packet variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
-  RunConformance(AccelKind::Octree);
+  RunClConformance(AccelKind::Octree);
 }
 
 TEST_CASE("opencl: conformance, hgrid, ray and packet variants, every SPD scene x ray kind" *
           doctest::skip(NoOpenCL()))
 {
-  RunConformance(AccelKind::HGrid);
+  RunClConformance(AccelKind::HGrid);
 }
 
 TEST_CASE("opencl: primary rays generated on the device equal the host's" * doctest::skip(NoOpenCL()))
@@ -379,7 +370,7 @@ TEST_CASE("opencl: primary rays generated on the device equal the host's" * doct
     CHECK(nHit > rays.size() / 4);
     // With fp64 the device computes the rays in double as the host does:
     // the same rays, so the same answers bit for bit.
-    if (fp64) CHECK(Compare(hits, ref, false).differ == 0);
+    if (fp64) CHECK(CompareCl(hits, ref, false).differ == 0);
   }
 }
 
@@ -439,7 +430,7 @@ TEST_CASE("opencl: statistics and unified hits" * doctest::skip(NoOpenCL()))
       std::vector<HitRecord> hits;
       CreateTracer(scene, cfg)->Trace(rays, hits, false, &stats);
       INFO(std::string(AccelKindName(accel)), " ", variant);
-      CHECK(Compare(hits, ref, false).differ == 0);  // unified ids and barycentrics of every piece
+      CHECK(CompareCl(hits, ref, false).differ == 0);  // unified ids and barycentrics of every piece
       CHECK(stats.rays == rays.size());
       CHECK(stats.nIT > 0);
       CHECK(stats.nTS > 0);
@@ -475,7 +466,7 @@ TEST_CASE("opencl: --device with two devices shares each batch and answers as on
     auto t = CreateTracer(scene, two);
     t->Trace(rays, b, occlusion, &sb);
     INFO("occlusion ", occlusion);
-    CHECK(Compare(b, a, occlusion).differ == 0);
+    CHECK(CompareCl(b, a, occlusion).differ == 0);
     CHECK(sb.rays == sa.rays);
     CHECK(sb.nIT == sa.nIT);
     nlohmann::json j;
@@ -572,7 +563,7 @@ TEST_CASE("opencl: a corrupt program cache entry is rebuilt, never trusted" * do
     auto tracer = CreateTracer(scene, cfg);
     std::vector<HitRecord> hits;
     tracer->Trace(rays, hits, false, nullptr);
-    CHECK(Compare(hits, ref, false).differ == 0);
+    CHECK(CompareCl(hits, ref, false).differ == 0);
     nlohmann::json j;
     tracer->Describe(j);
     if (note) *note = j.value("program_cache_note", "");
@@ -839,7 +830,7 @@ TEST_CASE("opencl: a cached program whose kernels cannot be created is removed a
     auto tracer = CreateTracer(scene, c);
     std::vector<HitRecord> hits;
     tracer->Trace(rays, hits, false, nullptr);
-    CHECK(Compare(hits, ref, false).differ == 0);
+    CHECK(CompareCl(hits, ref, false).differ == 0);
     nlohmann::json j;
     tracer->Describe(j);
     if (note) *note = j.value("program_cache_note", "");

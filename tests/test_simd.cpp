@@ -19,27 +19,17 @@
 #include "tests/test_util.h"
 
 using namespace cr;
+using cr::test::kKinds;
+using cr::test::UlpDistance;
 
 namespace {
 
 constexpr auto& kSimdAccels = kAccelKinds;
-const RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
 const char* const kVariants[] = {"packet", "single"};
 
 std::vector<std::string> AvailableIsas() { return simd::SupportedVectorIsas(); }
 
-std::int64_t UlpDistance(float a, float b)
-{
-  std::int32_t ia, ib;
-  std::memcpy(&ia, &a, 4);
-  std::memcpy(&ib, &b, 4);
-  // Map to a monotonic integer line (negative floats count down from -0).
-  const std::int64_t la = ia < 0 ? -std::int64_t(ia & 0x7FFFFFFF) : ia;
-  const std::int64_t lb = ib < 0 ? -std::int64_t(ib & 0x7FFFFFFF) : ib;
-  return la > lb ? la - lb : lb - la;
-}
-
-struct Comparison {
+struct SimdComparison {
   std::uint64_t differentPrim = 0;     // closest hit: other primitive, t not equal (a failure)
   std::uint64_t exactTies = 0;         // closest hit: other primitive at exactly the same t
   std::uint64_t tBeyond2Ulp = 0;       // same primitive, t more than 2 ulp apart (a failure)
@@ -48,9 +38,9 @@ struct Comparison {
   std::uint64_t firstBad = ~0ull;
 };
 
-Comparison CompareWithScalar(const std::vector<HitRecord>& scalar, const std::vector<HitRecord>& simd, bool occlusion)
+SimdComparison CompareWithScalar(const std::vector<HitRecord>& scalar, const std::vector<HitRecord>& simd, bool occlusion)
 {
-  Comparison c;
+  SimdComparison c;
   REQUIRE(scalar.size() == simd.size());
   for (std::size_t i = 0; i < scalar.size(); ++i) {
     const HitRecord& a = scalar[i];
@@ -114,7 +104,7 @@ TEST_CASE("simd: every SPD scene x ray kind x ISA x variant matches the referenc
             cfg.variant = variant;
             std::vector<HitRecord> hits;
             const auto r = test::CheckTracer(scene, cfg, rays, occlusion, &hits);
-            const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
+            const SimdComparison c = CompareWithScalar(scalarHits, hits, occlusion);
             INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", isa, " ", variant, ": ", r.wrong,
                  " wrong of ", r.rays, "; vs scalar: ", c.differentPrim, " other prim, ", c.tBeyond2Ulp, " t > 2 ulp, ",
                  c.occlusionDiffers, " occlusion differs (first ray ", c.firstBad, ")");
@@ -163,7 +153,7 @@ TEST_CASE("simd: fast precision returns the scalar fast kernels' answers")
             cfg.variant = variant;
             std::string vn;
             const auto hits = TraceWith(scene, cfg, rays, occlusion, &vn);
-            const Comparison c = CompareWithScalar(scalarHits, hits, occlusion);
+            const SimdComparison c = CompareWithScalar(scalarHits, hits, occlusion);
             INFO(name, " ", RayKindName(kind), " ", AccelKindName(accel), " ", vn);
             CHECK(vn == isa + " " + variant + " fast");
             CHECK(c.differentPrim == 0);

@@ -136,6 +136,21 @@ inline std::string TempPath(const std::string& name, const std::string& prefix =
   return (ProcessTempDir(prefix) / name).string();
 }
 
+// The four ray kinds of the conformance checks.
+inline constexpr RayKind kKinds[] = {RayKind::Primary, RayKind::Shadow, RayKind::Diffuse, RayKind::Random};
+
+// The distance in ulps between two floats (on the monotonic integer line of
+// their bit patterns, negative floats counting down from -0).
+inline std::int64_t UlpDistance(float a, float b)
+{
+  std::int32_t ia, ib;
+  std::memcpy(&ia, &a, 4);
+  std::memcpy(&ib, &b, 4);
+  const std::int64_t la = ia < 0 ? -std::int64_t(ia & 0x7FFFFFFF) : ia;
+  const std::int64_t lb = ib < 0 ? -std::int64_t(ib & 0x7FFFFFFF) : ib;
+  return la > lb ? la - lb : lb - la;
+}
+
 inline std::string SourcePath(const std::string& rel) { return std::string(CELLRAY_SOURCE_DIR) + "/" + rel; }
 inline std::string SpdPath(const std::string& name) { return SourcePath("scenes/spd/" + name + ".nff"); }
 
