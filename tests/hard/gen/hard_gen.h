@@ -96,6 +96,8 @@ inline RayRecord RecF(const glm::vec3& o, const glm::vec3& d, float tmin = 0.0f,
 }
 
 // Exactly representable as float?
+inline constexpr double kPi = 3.14159265358979323846;
+
 inline bool ExactF(double x) { return double(float(x)) == x; }
 inline bool ExactF(const glm::dvec3& v) { return ExactF(v.x) && ExactF(v.y) && ExactF(v.z); }
 inline glm::dvec3 D(const glm::vec3& v) { return {v.x, v.y, v.z}; }

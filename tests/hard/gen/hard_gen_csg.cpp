@@ -24,7 +24,6 @@ namespace cr::hard {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The solids about centre c.
 std::string Solids(const glm::dvec3& c)
@@ -56,7 +55,7 @@ std::string Solids(const glm::dvec3& c)
   return s;
 }
 
-HardCase Coincident(const GenOptions& o)
+HardCase CsgCoincident(const GenOptions& o)
 {
   Rng rng(1901);
   SceneBuilder b;
@@ -136,7 +135,7 @@ void AddCsgCases(std::vector<CaseSpec>& specs)
                    "rays through and along the shared faces, at the pip's rim and the lens's edge off by 1e-7..1e-3 "
                    "of the radius, and rays leaving the faces (a twelfth nearly along them). Expect: the reference's "
                    "answer; a hit on an internal (shared) face is wrong.",
-                   false, [](AccelKind, const GenOptions& o) { return Coincident(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return CsgCoincident(o); }});
 }
 
 }  // namespace cr::hard

@@ -45,7 +45,7 @@ float Ulp(float x, float towards) { return std::nextafter(x, towards); }
 
 constexpr double kBox = 60.0;
 
-HardCase Curved(const GenOptions& o)
+HardCase GrazingCurved(const GenOptions& o)
 {
   SceneBuilder b;
   const glm::dvec3 cs(-20.0, 0.5, 0.25);           // sphere, radius 5
@@ -131,7 +131,7 @@ HardCase Curved(const GenOptions& o)
   return c;
 }
 
-HardCase Planar(const GenOptions& o)
+HardCase GrazingPlanar(const GenOptions& o)
 {
   SceneBuilder b;
   const glm::dvec3 t0(0, 0, 0.75), t1(8, 1, 0.75), t2(3, 7, 0.75);  // in z = 0.75
@@ -208,12 +208,12 @@ void AddGrazingCases(std::vector<CaseSpec>& specs)
                    "moved one ulp in or out, rays lying in the cylinder's and the cone's surface, tangents to their "
                    "rims; origins before the tangent point or on it. Expect: the grazed surface if the reference "
                    "hits it or it is marginal, else the backstop; never a miss, never NaN.",
-                   false, [](AccelKind, const GenOptions& o) { return Curved(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return GrazingCurved(o); }});
   specs.push_back({"grazing/planar", "grazing",
                    "A triangle in z = 0.75, a pentagon (three pieces) in y = -20.5, a triangle in x + 2y + 2z = 30, "
                    "in a backstop box: rays in their planes (d component +-0, or integer directions in the tilted "
                    "plane), along their edges and diagonals, and one ulp off the plane. Expect as grazing/curved.",
-                   false, [](AccelKind, const GenOptions& o) { return Planar(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return GrazingPlanar(o); }});
 }
 
 }  // namespace cr::hard

@@ -241,7 +241,7 @@ HardCase BadParam(const char* name, AccelKind accel, const AccelParams& params)
   return c;
 }
 
-HardCase Coincident(const GenOptions& o)
+HardCase InputCoincident(const GenOptions& o)
 {
   SceneBuilder b;
   for (int k = 0; k < 8; ++k) b.Sphere({8.0 * (k & 1), 8.0 * ((k >> 1) & 1), 8.0 * ((k >> 2) & 1)}, 0.1);
@@ -315,7 +315,7 @@ void AddExtremeCases(std::vector<CaseSpec>& specs)
                    "1000 coincident spheres with --octree-leaf 1 --octree-depth 20 (--bvh-leaf 1): the octree stops "
                    "at its depth limit, the BVH cannot split them. Expect: rays through the cluster report the "
                    "lowest id (the exact tie of t goes to the lower index).",
-                   false, [](AccelKind, const GenOptions& o) { return Coincident(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return InputCoincident(o); }});
 }
 
 }  // namespace cr::hard

@@ -25,7 +25,6 @@ namespace cr::hard {
 namespace {
 
 constexpr double kStep = 0x1p-16;
-constexpr double kPi = 3.14159265358979323846;
 
 struct Mesh {
   std::vector<glm::dvec3> v;

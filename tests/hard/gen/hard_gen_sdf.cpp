@@ -22,7 +22,6 @@ namespace cr::hard {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // The blocks about centre c: a ball, a torus (about y) and a blob (two balls
 // in a smooth union with a capsule), then a thin torus and a thin capsule;

@@ -71,7 +71,7 @@ HardCase SelfCase(const char* name, std::shared_ptr<const Scene> scene, const st
   return c;
 }
 
-HardCase Curved(const GenOptions& o)
+HardCase SelfCurved(const GenOptions& o)
 {
   SceneBuilder b;
   b.Sphere({0, 0, 0}, 1.0);
@@ -95,7 +95,7 @@ HardCase Curved(const GenOptions& o)
   return SelfCase("self/curved", b.Finish(), views, {{50, -50, 100}, {-1000, 500, 800}}, o.quick ? 3000 : 30000, 601);
 }
 
-HardCase Planar(const GenOptions& o)
+HardCase SelfPlanar(const GenOptions& o)
 {
   SceneBuilder b;
   b.Triangle({0, 0, 0}, {100, 0, 0}, {100, 1e-3, 1e-4});        // sliver
@@ -141,12 +141,12 @@ void AddSelfCases(std::vector<CaseSpec>& specs)
                    std::string("Spheres of radius 1, 0.01, 100 (at 250) and 5 (at 2000), a cylinder, a cone, a thin "
                                "cylinder 43 long, a 4000-wide ground quad.") +
                        expect,
-                   false, [](AccelKind, const GenOptions& o) { return Curved(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return SelfCurved(o); }});
   specs.push_back({"self/planar", "self",
                    std::string("Slivers (100 x 0.001, 50 x 0.002), a thin tilted triangle and a 10^4-wide quad seen "
                                "near its middle.") +
                        expect,
-                   false, [](AccelKind, const GenOptions& o) { return Planar(o); }});
+                   false, [](AccelKind, const GenOptions& o) { return SelfPlanar(o); }});
   specs.push_back({"self/far-plane", "self",
                    std::string("A 1000-wide quad in the plane z = 1e5, a sphere and a cylinder beside it, all at "
                                "coordinates 1e5, camera 80 away.") +

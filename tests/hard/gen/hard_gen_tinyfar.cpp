@@ -30,7 +30,7 @@ namespace cr::hard {
 namespace {
 
 constexpr double kRadius = 1e-4;
-constexpr double kRelTolT = 0x1p-20;
+constexpr double kTinyFarRelTolT = 0x1p-20;
 
 // Offsets of the sphere centres from the camera, |offset| = 1e4 (the last
 // two only up to rounding).
@@ -51,7 +51,7 @@ HardCase Aimed(const char* name, const glm::dvec3& T, const GenOptions& o)
   c.name = name;
   c.scene = b.Finish();
   c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  c.relTolT = kTinyFarRelTolT;
   const std::size_t perSphere = o.quick ? 200 : 2000;
   const glm::vec3 tf(T);
   for (std::size_t s = 0; s < c.scene->spheres.size(); ++s) {
@@ -89,7 +89,7 @@ HardCase Jittered(const GenOptions& o)
   c.name = "tiny-far/jittered-origins";
   c.scene = b.Finish();
   c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  c.relTolT = kTinyFarRelTolT;
   const std::size_t perSphere = o.quick ? 200 : 2000;
   for (std::size_t s = 0; s < c.scene->spheres.size(); ++s) {
     const glm::dvec3 dir = D(c.scene->spheres[s].center);
@@ -120,7 +120,7 @@ HardCase BelowUlp(const GenOptions& o)
   c.name = "tiny-far/depth-below-ulp";
   c.scene = b.Finish();
   c.expect = Expect::Target;
-  c.relTolT = kRelTolT;
+  c.relTolT = kTinyFarRelTolT;
   const std::size_t n = o.quick ? 400 : 4000;
   for (std::size_t k = 0; k < n; ++k) {
     const double rho = 0.8 * kRadius * std::sqrt(rng.Uniform()), phi = rng.Uniform(0.0, 6.283185307179586);
